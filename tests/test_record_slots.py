@@ -211,9 +211,8 @@ WIDER_NOT_RECORDS = {
     "drives/circuit/drive.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
     # T: a time grid's first and last; t: a time grid's first and last; y: a state vector's components
     "drives/circuit/endflight.py": {"T", "t", "y"},
-    # Y: rows of states: the first and last; t: a time grid's first and last; x: a grid's or state's
-    # entries
-    "drives/circuit/flight.py": {"Y", "t", "x"},
+    # Y: rows of states: the first and last; t: a time grid's first and last
+    "drives/circuit/flight.py": {"Y", "t"},
     "drives/circuit/watch.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
     # q: the modal coordinates: [0] the rigid mode; t: a time grid's first and last; v: the modal
     # velocities ([0] the rigid mode) or a series' last

@@ -3,30 +3,19 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+import json
 
 import numpy as np
 import pytest
+from drifter_optimum import EXAMPLE, collar
 
 from impactbar.orbits import coupled
 from impactbar.physical import build, read_config, with_values
+from impactbar.physical.optimize_cache import dumps
 from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, _design_record
+from impactbar.physical.optimize_failures import failures_table
 
 pytest.importorskip("pint")
-
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock_piston.toml"
-#: the optimum with the drilling rate held (docs/optimising_a_drifter.md)
-OPTIMUM = {"piston.collar_diameter": "0.04721879723846864 m",
-           "piston.front_rod_diameter": "0.04560714397207219 m",
-           "piston.rear_rod_diameter": "0.04058336647137088 m",
-           "chambers.rear_volume": "8.177116598602943e-05 m**3", "valve.switch_out": "0.02140236229697432 m",
-           "accumulator.precharge": "10041438.916236278 Pa"}
-
-
-def _collar(factor: float) -> dict:
-    """The optimum with its collar's diameter times ``factor``: at 1.01 (47.69 mm) no one-impact
-    orbit, at 1.003 and 1.03 one (a band of designs without one between them)."""
-    return dict(OPTIMUM, **{"piston.collar_diameter": f"{0.04721879723846864 * factor!r} m"})
 
 
 def _blows(monkeypatch, changes: dict):
@@ -49,8 +38,8 @@ def _blows(monkeypatch, changes: dict):
 
 
 def test_a_design_without_an_orbit_costs_about_what_one_with_an_orbit_costs(monkeypatch):
-    n_ok, orbit = _blows(monkeypatch, _collar(1.003))
-    n_fail, err = _blows(monkeypatch, _collar(1.01))
+    n_ok, orbit = _blows(monkeypatch, collar(1.003))
+    n_fail, err = _blows(monkeypatch, collar(1.01))
     assert not isinstance(orbit, Exception) and orbit.stable
     # Newton's steps circled (a step of 1.7e-3 relative, again and again): given up when they stall,
     # where before the chord and then Newton's method took their 50 steps each (907 blows, 15 s)
@@ -60,7 +49,7 @@ def test_a_design_without_an_orbit_costs_about_what_one_with_an_orbit_costs(monk
 
 def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_there():
     cfg, folder = read_config(EXAMPLE)
-    changes = _collar(1.01)
+    changes = collar(1.01)
     rec = _design_record(changes, cfg, folder, dict(DEFAULT_CONSTRAINTS, mean_supply_pressure=None))
     assert rec["ok"] is False and rec["feasible"] is False
     assert "no periodic orbit" in rec["error"] and "Newton stalled" in rec["error"]
@@ -81,3 +70,15 @@ def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_
     # (the run ends at its last blow here, at 1 s there: the integrator's steps differ, by some 1e-10)
     assert motion["impact_velocity"] == pytest.approx(v[-1], rel=1e-8)
     assert motion["blow_frequency"] == pytest.approx(1.0 / (t[-1] - t[-2]), rel=1e-8)
+
+    # the JSON result's history keeps why and the classified motion; the table (the CLI's) says both
+    kept = json.loads(dumps(rec))
+    assert kept["error"] == rec["error"] and kept["motion"]["period_blows"] == 1
+    assert kept["motion_summary"] == rec["motion_summary"]
+    diameter = 0.04721879723846864 * 1.01
+    vary = {"piston.collar_diameter": {"low": 0.047, "high": 0.052, "unit": "m"}}
+    history = [{"ok": True, "seconds": 0.3}, dict(rec, values={"piston.collar_diameter": diameter})]
+    table = failures_table(history, vary).splitlines()
+    assert table[0].startswith("1 of 2 designs without an operating point (")
+    assert table[1] == ("  piston.collar_diameter 47.691 mm: find_orbit found no periodic orbit of the drive "
+                        f"with one impact per period; {rec['motion_summary']}")

@@ -475,8 +475,17 @@ def _least_pressures(pieces) -> dict:
         return {}
     layout = pieces[0].layout
     extra = [s for s in layout.states[3:-1] if s not in layout.mechanical]  # (the pressures after p_s)
-    return {name: min(low for low, _ in (p.extremes(name) for p in pieces)) * PRESSURE_SCALE
-            for name in ("front", "rear", "supply", *extra)}
+    names = ("front", "rear", "supply", *extra)
+    steps = [p for p in pieces if hasattr(p, "extremes_over")]  # (the flights' together)
+    lows = []
+    if steps:
+        low, _ = next(iter(steps)).extremes_over(steps, names)
+        lows.append(low)
+    for p in pieces:
+        if not hasattr(p, "extremes_over"):  # (a blow's: BlowPiece.extremes_of)
+            low, _ = p.extremes_of(names)
+            lows.append(low)
+    return {name: float(low) * PRESSURE_SCALE for name, low in zip(names, np.min(lows, axis=0), strict=True)}
 
 
 def _refuse_cavitation(low: dict, what: str) -> None:

@@ -11,7 +11,8 @@ chain's starts fail in a few steps each rather than in their fifty.
 
 from __future__ import annotations
 
-__all__ = ["ERROR_CHARS", "MOTION_BLOWS", "failed_record", "motion_summary"]
+__all__ = ["ERROR_CHARS", "MOTION_BLOWS", "FAILED_ROWS", "failed_record", "motion_summary", "design_text",
+           "failures_table"]
 
 #: The most characters of the error a failed design's record keeps (its first line): the default
 #: chain's list of the starts it tried, each with why it failed.
@@ -19,6 +20,9 @@ ERROR_CHARS = 500
 #: The blows a design without a one-impact orbit is simulated from rest to classify its motion (the
 #: ``settle`` task's default; some 5 s of CPU on the example rock drifter)
 MOTION_BLOWS = 40
+#: The most designs without an operating point a result's table lists (the others counted; all in
+#: its JSON's ``history``)
+FAILED_ROWS = 5
 
 
 def failed_record(exc: BaseException, seconds: float, drifter=None) -> dict:
@@ -87,3 +91,86 @@ def motion_summary(motion: dict) -> str:
     chatter = motion["chatter_per_blow"]
     said = "no chatter" if chatter == 0 else f"{chatter:.3g} chatter impacts per blow"
     return f"{head}, {said}, {motion['blow_frequency']:.3g} Hz, {motion['impact_velocity']:.3g} m/s"
+
+
+def design_text(values: dict, vary: dict) -> str:
+    """A design's values of the varied keys in their display units, on one line.
+
+    Parameters
+    ----------
+    values : dict
+        Dotted key to value (SI).
+    vary : dict
+        Dotted key to ``low``, ``high`` and ``unit`` (:attr:`DrifterOptimum.vary
+        <impactbar.physical.optimize_drifter.DrifterOptimum>`).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> design_text({"x": 0.021}, {"x": {"low": 0.02, "high": 0.023, "unit": "m"}})
+    'x 21 mm'
+    """
+    from .display_units import display_unit
+
+    parts = []
+    for k in vary:
+        scale, unit = display_unit(vary[k]["unit"])
+        parts.append(f"{k} {values[k] * scale:.5g}{' ' + unit if unit else ''}")
+    return ", ".join(parts)
+
+
+def failures_table(history: list, vary: dict, most: int = FAILED_ROWS) -> str:
+    """The designs without an operating point among ``history``: how many, what their evaluations
+    and their motions' classification cost (s, against a design with one on average), and, one line
+    each (at most ``most``, the first), the design, why it has none (its error's first clause) and
+    what the drill does there (:func:`motion_summary`).
+
+    Parameters
+    ----------
+    history : list of dict
+        The designs' records (:func:`failed_record`'s where without an operating point).
+    vary : dict
+        As :func:`design_text` takes it.
+    most : int
+        The most designs listed, at least 0.
+
+    Returns
+    -------
+    str
+        Empty where every design has an operating point.
+
+    Raises
+    ------
+    ValueError
+        ``most`` negative.
+
+    Examples
+    --------
+    >>> vary = {"x": {"low": 0.02, "high": 0.023, "unit": "m"}}
+    >>> rec = dict(failed_record(ValueError("find_orbit found no periodic orbit; tried this"), 0.5),
+    ...            values={"x": 0.021}, motion_summary="settles into a period-2 motion", motion_seconds=1.0)
+    >>> print(failures_table([{"ok": True, "seconds": 0.25}, rec], vary))
+    1 of 2 designs without an operating point (0.5 s + 1 s classifying their motion; 0.25 s one with):
+      x 21 mm: find_orbit found no periodic orbit; settles into a period-2 motion
+    """
+    if not (isinstance(most, int) and most >= 0):
+        raise ValueError(f"most must be an integer at least 0; got {most!r}")
+    failed = [r for r in history if not r.get("ok")]
+    if not failed:
+        return ""
+    ok = [r["seconds"] for r in history if r.get("ok") and "seconds" in r]
+    cost = sum(r.get("seconds", 0.0) for r in failed)
+    motion = sum(r.get("motion_seconds", 0.0) for r in failed)
+    against = f"; {sum(ok) / len(ok):.3g} s one with" if ok else ""
+    rows = [f"{len(failed)} of {len(history)} designs without an operating point ({cost:.3g} s + "
+            f"{motion:.3g} s classifying their motion{against}):"]
+    for r in failed[:most]:
+        why, _, _ = r["error"].partition("; ")
+        said = f"; {r['motion_summary']}" if "motion_summary" in r else ""
+        rows.append(f"  {design_text(r['values'], vary) if 'values' in r else 'a design'}: {why}{said}")
+    if len(failed) > most:
+        rows.append(f"  and {len(failed) - most} more (the JSON result's history)")
+    return "\n".join(rows)

@@ -199,17 +199,10 @@ def found_table(found: list, vary: dict, fkey: str) -> str:
     ...                   {"x": {"low": 0.02, "high": 0.023, "unit": "m"}}, "impact_power_kW"))
     local search 1 (8 designs) from x 20 mm: x 21 mm; impact_power_kW 13, feasible
     """
-    from .display_units import display_unit
+    from .optimize_failures import design_text
 
-    def design(values: dict) -> str:
-        parts = []
-        for k in vary:
-            scale, unit = display_unit(vary[k]["unit"])
-            parts.append(f"{k} {values[k] * scale:.5g}{' ' + unit if unit else ''}")
-        return ", ".join(parts)
-
-    return "\n".join(f"local search {i} ({f['evaluations']} designs) from {design(f['start'])}: "
-                     f"{design(f['values'])}; {fkey} "
+    return "\n".join(f"local search {i} ({f['evaluations']} designs) from {design_text(f['start'], vary)}: "
+                     f"{design_text(f['values'], vary)}; {fkey} "
                      + ("none" if f["objective"] is None else f"{f['objective']:.5g}")
                      + (", feasible" if f["feasible"] else ", infeasible")
                      for i, f in enumerate(found, 1))

@@ -12,6 +12,7 @@ import numpy as np
 
 from .display_units import display_unit
 from .optimize_cache import dumps
+from .optimize_failures import failures_table
 from .optimize_problem import FEASIBILITY_TOLERANCE, objectives
 
 __all__ = ["DrifterOptimum"]
@@ -121,7 +122,8 @@ class DrifterOptimum:
 
     def table(self) -> str:
         """Baseline and optimum side by side: the variables, every objective, every constraint with
-        its limit and margin."""
+        its limit and margin; then the designs without an operating point, why and what the drill does
+        there (:func:`~impactbar.physical.optimize_failures.failures_table`)."""
         word = ("optimum" if self.certificate is not None and self.certificate.converged else
                 "infeasible" if not self.optimum.get("feasible", True) else "best found")
         rows = [f"{'':34s}{'baseline':>14s}{word:>14s}"]
@@ -155,6 +157,9 @@ class DrifterOptimum:
                     f"slowest design {slowest:.1f} s")
         if self.certificate is not None:
             rows.append(f"{word}: {self.certificate}")
+        failed = failures_table(self.history, self.vary)
+        if failed:
+            rows.append(failed)
         return "\n".join(rows)
 
     def plot(self, axes=None):

@@ -114,8 +114,31 @@ class BlowPiece(ModalEnd):
     def extremes(self, k: int | str) -> tuple[float, float]:
         """The least and the greatest value of the drive's state component ``k`` (an index or a name of
         its layout) over the blow (its pieces' :meth:`extremes`)."""
-        lo, hi = zip(*(p.extremes(k) for p in self.drive_pieces), strict=True)
-        return float(min(lo)), float(max(hi))
+        (lo,), (hi,) = self.extremes_of([k])
+        return float(lo), float(hi)
+
+    def extremes_of(self, ks) -> tuple[np.ndarray, np.ndarray]:
+        """The least and the greatest value of each of the drive's state components ``ks`` over the
+        blow: its pieces' :meth:`extremes`, the same numbers, taken together where the pieces can
+        (``extremes_over``: a circuit's pieces solve their interpolants' cubics only where these can
+        pass the blow's least or greatest sample; theory §11, *Limits of this version*).
+
+        Parameters
+        ----------
+        ks : list of int or str
+            The components (indices or names of the drive's layout).
+
+        Returns
+        -------
+        lows, highs : numpy.ndarray, shape (len(ks),)
+            In model units.
+        """
+        parts = self.drive_pieces
+        if parts and all(hasattr(p, "extremes_over") for p in parts):
+            return next(iter(parts)).extremes_over(parts, ks)
+        ext = [[p.extremes(k) for p in parts] for k in ks]
+        return (np.array([min(lo for lo, _ in e) for e in ext], float),
+                np.array([max(hi for _, hi in e) for e in ext], float))
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the blow (an oil circuit's)."""
@@ -193,8 +216,7 @@ class BlowSummary(BlowPiece):
         self._lows = self._highs = None
         states = getattr(self.layout, "n_states", 0)
         if states and every("extremes"):
-            lo, hi = zip(*(piece.extremes(k) for k in range(states)), strict=True)
-            self._lows, self._highs = np.array(lo), np.array(hi)
+            self._lows, self._highs = piece.extremes_of(range(states))
         self.drive_pieces = ()
 
     def _refuse(self, what):
@@ -247,9 +269,19 @@ class BlowSummary(BlowPiece):
             self._refuse("work of the drive")
         return self._work
 
-    def extremes(self, k: int | str) -> tuple[float, float]:
-        """The least and the greatest value of the drive's state component ``k`` (an index or a name of
-        its layout) over the blow (:meth:`BlowPiece.extremes`, kept).
+    def extremes_of(self, ks) -> tuple[np.ndarray, np.ndarray]:
+        """The least and the greatest value of each of the drive's state components ``ks`` over the
+        blow (:meth:`BlowPiece.extremes_of`, kept; :meth:`BlowPiece.extremes` reads them).
+
+        Parameters
+        ----------
+        ks : list of int or str
+            The components (indices or names of the drive's layout).
+
+        Returns
+        -------
+        lows, highs : numpy.ndarray, shape (len(ks),)
+            In model units.
 
         Raises
         ------
@@ -257,8 +289,8 @@ class BlowSummary(BlowPiece):
             Where the drive's pieces had no extremes."""
         if self._lows is None:
             self._refuse("extremes of the drive's state")
-        j = self.layout[k] if isinstance(k, str) else int(k)
-        return float(self._lows[j]), float(self._highs[j])
+        j = [self.layout[k] if isinstance(k, str) else int(k) for k in ks]
+        return self._lows[j], self._highs[j]
 
 
 #: more blows than this, each starting at once where the last ended (the piston pressed on the stop

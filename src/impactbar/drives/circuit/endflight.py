@@ -26,7 +26,7 @@ import numpy as np
 from ..base import DriveState, FlightSettings
 from . import _endfield as EK
 from ._field import RAMP_EV
-from .flight import _MAX_STEPS, HermiteSteps, _compiled_driver, _hermite_extremes, _message
+from .flight import _MAX_STEPS, HermiteSteps, _compiled_driver, _message
 from .settings import circuit_settings
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
@@ -111,16 +111,8 @@ class EndPiece(HermiteSteps):
         """
         return float(self._at([t])[self._energy_start + self.layout.energy["piston"], 0])
 
-    def extremes(self, k: int | str) -> tuple[float, float]:
-        """The least and the greatest value of the circuit's state component ``k`` (an index of ``z``,
-        or a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece (its steps and the interpolant's
-        stationary points)."""
-        j = 1 + (self.layout[k] if isinstance(k, str) else k)
-        return _hermite_extremes(self.t, self.y[:, j], self.f[:, j])
-
-    def supply_extremes(self) -> tuple[float, float]:
-        """The least and the greatest supply pressure over the piece."""
-        return self.extremes(self.layout.supply)
+    def _column(self, k: int | str) -> int:
+        return 1 + (self.layout[k] if isinstance(k, str) else k)
 
 
 class EndFlight(NamedTuple):

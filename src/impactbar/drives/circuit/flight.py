@@ -52,25 +52,12 @@ from ..base import DriveState, FlightSettings
 from ..flight import ARRIVAL, END, EVENT, Flight, ModalEnd
 from . import _field as K
 from . import _magnus
+from .extremes import hermite_extremes
 from .settings import DEFAULT_SETTINGS, CircuitFlightSettings, circuit_settings
 
 __all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS",
            "EXPLICIT_STIFFNESS", "EXPLICIT_TOLERANCE", "magnus_state_settings", "uses_magnus", "uses_dop853",
            "spectrum", "keep_spacing", "last_integrator"]
-
-
-def _hermite_extremes(t, x, dxdt) -> tuple[float, float]:
-    """The least and the greatest value of a sampled history ``x(t)`` with its rates ``dxdt``
-    (shapes ``(T,)``): over the samples and the stationary points of its cubic Hermite interpolant
-    (scipy's ``CubicHermiteSpline``)."""
-    if t.size < 2:
-        return float(x[0]), float(x[0])
-    from scipy.interpolate import CubicHermiteSpline
-
-    sp = CubicHermiteSpline(t, x, dxdt)
-    roots = sp.derivative().roots(extrapolate=False)
-    vals = np.concatenate((x, sp(roots))) if roots.size else x
-    return float(np.min(vals)), float(np.max(vals))
 
 
 class HermiteSteps:
@@ -79,6 +66,44 @@ class HermiteSteps:
     what the circuit's pieces of a flight and of a blow share."""
 
     __slots__ = ("t0", "t_end", "t", "y", "_spline")
+
+    def _column(self, k: int | str) -> int:
+        """The column of ``y`` of the drive's state component ``k`` (an index of ``z`` or a name of
+        ``layout``)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def extremes_over(pieces, ks) -> tuple[np.ndarray, np.ndarray]:
+        """The least and the greatest value of each of the drive's state components ``ks`` over
+        ``pieces`` together (:func:`~.extremes.hermite_extremes`: the pieces' :meth:`extremes`, the same
+        numbers).
+
+        Parameters
+        ----------
+        pieces : list of HermiteSteps
+            At least one.
+        ks : list of int or str
+            The components (indices of ``z`` or names of ``layout``).
+
+        Returns
+        -------
+        lows, highs : numpy.ndarray, shape (len(ks),)
+            In model units.
+        """
+        cols = [[p._column(k) for k in ks] for p in pieces]
+        return hermite_extremes(((p.t, p.y[:, c], p.f[:, c]) for p, c in zip(pieces, cols, strict=True)),
+                                len(ks))
+
+    def extremes(self, k: int | str) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` (an index of ``z``, or
+        a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece: its steps and the stationary points
+        of its cubic Hermite interpolant (:func:`~.extremes.hermite_extremes`)."""
+        (lo,), (hi,) = self.extremes_over([self], [k])
+        return float(lo), float(hi)
+
+    def supply_extremes(self) -> tuple[float, float]:
+        """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
+        return self.extremes(self.layout.supply)
 
     def _at(self, t):
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
@@ -154,16 +179,8 @@ class CircuitPiece(HermiteSteps, ModalEnd):
         z, L = self.drive_state(t), self.layout
         return z[L["rear"]] - self.alpha * z[L["front"]]
 
-    def extremes(self, k: int | str) -> tuple[float, float]:
-        """The least and the greatest value of the drive's state component ``k`` (an index of ``z``, or
-        a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece: its steps and the stationary points
-        of its cubic Hermite interpolant."""
-        j = 2 * self.M + (self.layout[k] if isinstance(k, str) else k)
-        return _hermite_extremes(self.t, self.y[:, j], self.f[:, j])
-
-    def supply_extremes(self) -> tuple[float, float]:
-        """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
-        return self.extremes(self.layout.supply)
+    def _column(self, k: int | str) -> int:
+        return 2 * self.M + (self.layout[k] if isinstance(k, str) else k)
 
     def energies(self):
         """The energy quadratures over the piece (theory §11; ``layout.energies``)."""

@@ -1,0 +1,21 @@
+"""The whole-drifter optimiser's documented optimum of the example rock drifter with its piston
+given by its shape (docs/optimising_a_drifter.md, the drilling rate held), and designs beside it
+with a wider collar: for the tests of its designs without an operating point and for
+``benchmarks/bench_failed_evaluation.py`` (which runs it on other trees too: no import of the
+package here)."""
+
+from pathlib import Path
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock_piston.toml"
+#: the optimum with the drilling rate held (docs/optimising_a_drifter.md)
+OPTIMUM = {"piston.collar_diameter": "0.04721879723846864 m",
+           "piston.front_rod_diameter": "0.04560714397207219 m",
+           "piston.rear_rod_diameter": "0.04058336647137088 m",
+           "chambers.rear_volume": "8.177116598602943e-05 m**3", "valve.switch_out": "0.02140236229697432 m",
+           "accumulator.precharge": "10041438.916236278 Pa"}
+
+
+def collar(factor: float) -> dict:
+    """The optimum with its collar's diameter times ``factor``: from about 1.0095 to 1.0125 (47.69 mm
+    at 1.01) no one-impact orbit, at 1.003, 1.009, 1.013 and 1.03 one."""
+    return dict(OPTIMUM, **{"piston.collar_diameter": f"{0.04721879723846864 * factor!r} m"})
