@@ -147,7 +147,7 @@ NOT_RECORDS = {
     "measure/waves.py": {"after", "before", "parts", "time"},  # samples' ends; a window's two pieces
     "physical/hammer.py": {"breaks", "levels", "pieces"},  # a square wave's two levels and breaks
     "physical/loader.py": {"parts"},  # a dotted name's parts
-    "physical/optimize_drifter.py": {"kv"},  # a (name, constraint) pair's constraint
+    "physical/optimize_problem.py": {"kv"},  # a (name, constraint) pair's constraint
     "physical/piston.py": {"count", "edges", "pieces"},  # a one-slot box; sequences' ends
     "physical/results.py": {"tl"},  # the first and last time
     "physical/rock.py": {"tl"},  # the first and last time
@@ -442,6 +442,7 @@ STRING_NOT_RECORDS = {
     "physical/geometry.py": {"given"},  # the first name
     "physical/hammer.py": {"missing", "unknown"},  # the first name
     "physical/optimize_drifter.py": {"ranked"},  # the best-ranked design
+    "physical/optimize_integers.py": {"history", "runs"},  # the config's own integer design's (the first)
     "physical/optimize_problem.py": {"circuit", "unknown"},  # the first name
     "physical/rock.py": {"unknown"},  # the first name
     "physical/sensitivity.py": {"splitlines()"},  # a message's first line

@@ -488,7 +488,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
     def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
         drifter = build(with_values(cfg, design_of(v).changes), folder)
-        return evaluate_blow(drifter, V, limits) if ideal else evaluate_design(drifter, kept)[0]
+        if ideal:
+            return evaluate_blow(drifter, V, limits)
+        record, _ = evaluate_design(drifter, kept)
+        return record
 
     try:  # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)
         certificate = certify_search(fresh["optimum"], history, keys, (lo, span),

@@ -167,7 +167,11 @@ def integer_search(cfg: dict, spec: dict, vary: dict, objective: str, kind: str,
                               history=history, message=message, config=with_values(cfg, best["changes"]),
                               kind=kind)
     feasible = [(d, r) for d, r in runs if r.optimum.get("feasible")]
-    design, best = max(feasible, key=lambda dr: dr[1].optimum["objectives"][fkey]) if feasible else runs[0]
+    def objective_of(run) -> float:
+        _, result = run
+        return result.optimum["objectives"][fkey]
+
+    design, best = max(feasible, key=objective_of) if feasible else runs[0]
     history = [_with(rec, d) for d, r in runs for rec in r.history]
     message = (f"{len(runs)} integer designs searched over the other keys, the best at {_named(design)} "
                f"(its certificate over the other keys there): {best.message}")
