@@ -256,3 +256,107 @@ def test_a_rod_segment_and_a_valve_drifter_read_their_units_from_the_tree():
     drifter = read_config(Path(__file__).resolve().parents[2] / "examples" / "drifter_rock.toml")[0]
     with pytest.raises(ValueError, match="valve.delay.*a time"):
         build(with_values(drifter, {"valve.delay": "3 kg"}))
+
+
+def _drive_names() -> set:
+    """The drive's dimensionless names: its parameters, its parts' fields and the drifter's SI records
+    of them (``precharge``, ``volume``, ``precharge_Pa``)."""
+    from impactbar.drives.circuit.parameters import DECLARED
+
+    return {n for p in DECLARED for n in (p.name, p.field)} | {f.si for f in tree.FIELDS.values() if f.si}
+
+
+def named_by_hand(source: str, names) -> list[str]:
+    """The names of ``names`` that ``source`` writes: a call's keyword (``precharge=``) or a string
+    (``si["precharge_Pa"]``)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.keyword) and node.arg in names:
+            found.append(node.arg)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
+            found.append(node.value)
+    return found
+
+
+def test_the_drive_builder_names_no_dimensionless_field():
+    """``CircuitDrifter.drive`` builds the parts from the tree's declarations: 0 of the drive's
+    parameters, its parts' fields or their SI records written in it (the scan finds the old hand
+    join's)."""
+    import inspect
+    import textwrap
+
+    from impactbar.physical.circuit import CircuitDrifter
+
+    old = ('Accumulator(precharge=si["precharge_Pa"] / P, volume=si["accumulator_volume_m3"] / V)\n'
+           'Valve(switch_out=si["switch_out_m"] / L, coefficient=si["valve_coefficient"] * k)\n')
+    assert len(named_by_hand(old, _drive_names())) == 8
+    assert named_by_hand(textwrap.dedent(inspect.getsource(CircuitDrifter.drive)), _drive_names()) == []
+
+
+def test_a_field_declared_with_another_scale_reaches_the_drive(monkeypatch):
+    """A field's scale changed in its declaration alone (a function, or a new named scale of steps)
+    changes the drive's value of its parameter, and nothing else of the drive."""
+    import dataclasses
+
+    from impactbar.physical import circuit_preset
+
+    before = circuit_preset("circuit-drifter")
+    was = before.drive()
+    P = tree.PRESSURE_SCALE
+    f = tree.FIELDS["oil.transition_pressure"]
+    monkeypatch.setitem(tree.FIELDS, f.key, dataclasses.replace(f, scale=lambda d: 0.5 / P))
+    after = circuit_preset("circuit-drifter")
+    assert after.drive().oil.transition_pressure == before.si["transition_pressure_Pa"] * (0.5 / P)
+    assert after.drive().oil.transition_pressure == 0.5 * was.oil.transition_pressure
+    monkeypatch.setitem(tree.SCALE_STEPS, "bar_pressure", (("/", lambda d: 1e5),))
+    monkeypatch.setitem(tree.FIELDS, f.key, dataclasses.replace(f, scale="bar_pressure"))
+    drive = circuit_preset("circuit-drifter").drive()
+    assert drive.oil.transition_pressure == 2.0  # 0.2 MPa in bar
+    assert dataclasses.replace(drive, oil=was.oil) == was
+
+
+def test_every_field_the_drive_holds_reaches_it():
+    """Each of the drive's declared parameters that a tree field sets is set by :func:`drive_values`
+    in its declared part and field (the accumulator's only with a volume above 0); the one no field
+    sets (a held supply's pressure) is not."""
+    from impactbar.drives.circuit.parameters import DECLARED
+    from impactbar.physical import circuit_preset
+
+    set_ = {f.parameter for f in tree.FIELDS.values() if f.holder == "drive"}
+    assert {p.name for p in DECLARED} - set_ == {"supply_pressure"}
+    assert all(f.si for f in tree.FIELDS.values() if f.holder == "drive")
+    reached = {(part, name) for part, values in tree.drive_values(circuit_preset("circuit-drifter")).items()
+               for name in values}
+    assert reached == {(p.part, p.field) for p in DECLARED if p.name in set_}
+    bare = circuit_preset("circuit-drifter", accumulator={"volume": "0 L"})
+    assert "accumulator" not in tree.drive_values(bare) and bare.drive().accumulator is None
+
+
+def test_the_drive_rounds_each_field_as_its_scale_declares():
+    """Each dimensionless value of the drive is its SI value divided or multiplied by its scale as
+    the theory writes it (§11, eq. 2), to the bit: ``x / P``, ``x / (A_r L)``, ``K sqrt(P) / Q``
+    as ``K * (sqrt(P) / Q)``, the relief's ``K P / Q`` as ``(K P) / Q``, ``tau * Omega``; a value
+    at odd SI values, where ``x * (1 / P)`` and ``x / P`` differ in the last bit."""
+    from impactbar.physical import circuit_preset
+
+    d = circuit_preset("circuit-drifter", valve={"switch_in": "7.3 mm", "switching_time": "1.37 ms"},
+                       supply={"tank_pressure": "0.29 MPa", "relief_coefficient": "3.3e-10 m^3/s/Pa",
+                               "pump_flow": "73.3 L/min"},
+                       oil={"bulk_modulus": "1.37 GPa", "transition_pressure": "0.17 MPa"})
+    si, dr, P, L = d.si, d.drive(), tree.PRESSURE_SCALE, d.bar.length_m
+    V, Q, om = si["rear_area_m2"] * L, si["rear_area_m2"] * L * d.omega_rad_s, d.omega_rad_s
+    by_hand = {"chambers.area_ratio": si["front_area_m2"] / si["rear_area_m2"],
+               "chambers.rear_volume": si["rear_volume_m3"] / V, "valve.switch_out": si["switch_out_m"] / L,
+               "valve.switch_in": si["switch_in_m"] / L, "valve.switching_time": si["switching_time_s"] * om,
+               "valve.coefficient": si["valve_coefficient"] * (math.sqrt(P) / Q),
+               "supply.pump_flow": si["pump_flow_m3_s"] / Q,
+               "supply.tank_pressure": si["tank_pressure_Pa"] / P,
+               "supply.relief_coefficient": si["relief_coefficient"] * P / Q,
+               "accumulator.polytropic_exponent": si["polytropic_exponent"],
+               "oil.bulk_modulus": si["bulk_modulus_Pa"] / P,
+               "oil.transition_pressure": si["transition_pressure_Pa"] / P}
+    got = {k: getattr(getattr(dr, k.split(".")[0]), k.split(".")[1]) for k in by_hand}
+    assert got == by_hand
+    # (the odd values are odd: a factor would round some of them otherwise)
+    assert si["tank_pressure_Pa"] * (1.0 / P) != by_hand["supply.tank_pressure"]
+    assert si["transition_pressure_Pa"] * (1.0 / P) != by_hand["oil.transition_pressure"]

@@ -266,28 +266,17 @@ class CircuitDrifter(_ScaledDrifter):
         return circuit_graph(self)
 
     def drive(self):
-        """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
+        """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`, each
+        part's values converted from :attr:`si` by the parameter tree's declarations
+        (:func:`~impactbar.physical.tree.drive_values`: each field's scale and the drive's part and
+        field of its parameter); no accumulator where its volume is 0."""
         from ..drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
 
-        si, P, L = self.si, PRESSURE_SCALE, self.bar.length_m
-        V, Q, om = self.volume_scale_m3, self.flow_scale_m3_s, self.omega_rad_s
-        k = math.sqrt(P) / Q
-        acc = None
-        if si["accumulator_volume_m3"] > 0.0:
-            acc = Accumulator(precharge=si["precharge_Pa"] / P, volume=si["accumulator_volume_m3"] / V,
-                              polytropic_exponent=si["polytropic_exponent"])
+        v = tree.drive_values(self)
         return HydraulicCircuitDrive(
-            Chambers(area_ratio=si["front_area_m2"] / si["rear_area_m2"],
-                     rear_volume=si["rear_volume_m3"] / V, front_volume=si["front_volume_m3"] / V),
-            Valve(switch_out=si["switch_out_m"] / L, coefficient=si["valve_coefficient"] * k,
-                  switching_time=si["switching_time_s"] * om,
-                  switch_in=None if si["switch_in_m"] is None else si["switch_in_m"] / L),
-            Supply(pump_flow=si["pump_flow_m3_s"] / Q, hose_volume=si["hose_volume_m3"] / V,
-                   front_coefficient=si["front_coefficient"] * k, tank_pressure=si["tank_pressure_Pa"] / P,
-                   relief_pressure=si["relief_pressure_Pa"] / P,
-                   relief_coefficient=si["relief_coefficient"] * P / Q),
-            Oil(bulk_modulus=si["bulk_modulus_Pa"] / P, transition_pressure=si["transition_pressure_Pa"] / P),
-            acc, extra_parts=tuple(p.build(self) for p in self.parts))
+            Chambers(**v["chambers"]), Valve(**v["valve"]), Supply(**v["supply"]), Oil(**v["oil"]),
+            Accumulator(**v["accumulator"]) if "accumulator" in v else None,
+            extra_parts=tuple(p.build(self) for p in self.parts))
 
     # -- results -----------------------------------------------------------------------------------
     def orbit(self, guess=None, *, allow_cavitation: bool = False) -> CircuitDrifterOrbit:

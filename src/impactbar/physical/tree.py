@@ -6,7 +6,9 @@ not). The dimensionless parameters are their holders' own declarations (the circ
 :mod:`impactbar.drives.circuit.parameters`, the rod-rock law's, the bar model's): the tree names them.
 
 Every tool reads this one declaration: the configuration's reader (the sections' keys, the required
-ones, the values it converts), :meth:`~impactbar.physical.CircuitDrifter.to_dimensionless`,
+ones, the values it converts), the circuit drive (:func:`drive_values`: each field's SI value by its
+scale into the drive's part and field of its parameter),
+:meth:`~impactbar.physical.CircuitDrifter.to_dimensionless`,
 :func:`~impactbar.physical.continue_circuit`, the design maps' and the optimiser's units and integer
 keys, the sensitivities, the plausibility warnings and the command line. A field declared here is
 therefore set, swept, continued and optimised by its dotted name with no line elsewhere; the old
@@ -15,7 +17,9 @@ bounds) are views of it.
 
 Scales (theory §11, eq. 2): :math:`P` = 10 MPa, :math:`A_r` the rear area, :math:`L` and :math:`m`
 the piston's length and mass, :math:`\Omega = \sqrt{P A_r / (m L)}`, volumes in :math:`A_r L`, flows
-in :math:`A_r L \Omega`, forces in :math:`P A_r` (:data:`SCALES`).
+in :math:`A_r L \Omega`, forces in :math:`P A_r` (:data:`SCALE_STEPS`: each scale as the divisions
+and multiplications that take an SI value to its dimensionless one, so that each rounds as written;
+:data:`SCALES`: their factors).
 
 Examples
 --------
@@ -30,13 +34,14 @@ Examples
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 
 __all__ = ["Field", "FIELDS", "MACHINES", "SCALES", "field", "fields", "declared", "read_si",
            "config_sections", "section_keys", "required_keys", "integer_keys", "continuable_keys",
            "real_keys", "in_sections", "typical_ranges", "dimensionless_factor", "refuse_continuation",
-           "markdown_table"]
+           "markdown_table", "SCALE_STEPS", "convert", "has", "drive_values"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
@@ -295,22 +300,61 @@ WORDS = {"m**2": "an area", "m**3": "a volume", "Pa": "a pressure", "m": "a leng
          _RELIEF: "a flow coefficient (m^3/s/Pa)", "N/m": "a stiffness", "N": "a force", "kg": "a mass",
          "Hz": "a frequency", "kg/m**3": "a density", "N*s/m": "a damping coefficient"}
 
-#: Each scale's factor from SI to dimensionless, a function of the drifter (theory §11, eq. 2).
-SCALES: dict[str, Callable] = {
-    "pressure": lambda d: 1.0 / PRESSURE_SCALE,
-    "volume": lambda d: 1.0 / d.volume_scale_m3,
-    "flow": lambda d: 1.0 / d.flow_scale_m3_s,
-    "orifice": lambda d: math.sqrt(PRESSURE_SCALE) / d.flow_scale_m3_s,
-    "relief": lambda d: PRESSURE_SCALE / d.flow_scale_m3_s,
-    "length": lambda d: 1.0 / d.bar.length_m,
-    "time": lambda d: d.omega_rad_s,
-    "one": lambda d: 1.0,
-    "area": lambda d: 1.0 / d.si["rear_area_m2"],
-    "stiffness": lambda d: d.bar.length_m / d.scales.force_N,
-    "force": lambda d: 1.0 / d.scales.force_N,
-    "mass": lambda d: 1.0 / d.bar.mass_kg,
-    "damping": lambda d: 1.0 / (d.bar.mass_kg * d.omega_rad_s),
+#: Each scale as the steps that take an SI value to its dimensionless one (theory §11, eq. 2), in
+#: order: ``("/", f)`` divides by ``f(drifter)``, ``("*", f)`` multiplies by it. The steps are the
+#: declaration, not one factor: ``x / P`` and ``x * (1 / P)`` may differ in the last bit, and the
+#: circuit drive (:func:`drive_values`) converts each field exactly as its scale's steps say.
+SCALE_STEPS: dict[str, tuple] = {
+    "pressure": (("/", lambda d: PRESSURE_SCALE),),
+    "volume": (("/", lambda d: d.volume_scale_m3),),
+    "flow": (("/", lambda d: d.flow_scale_m3_s),),
+    "orifice": (("*", lambda d: math.sqrt(PRESSURE_SCALE) / d.flow_scale_m3_s),),
+    "relief": (("*", lambda d: PRESSURE_SCALE), ("/", lambda d: d.flow_scale_m3_s)),
+    "length": (("/", lambda d: d.bar.length_m),),
+    "time": (("*", lambda d: d.omega_rad_s),),
+    "one": (),
+    "area": (("/", lambda d: d.si["rear_area_m2"]),),
+    "stiffness": (("*", lambda d: d.bar.length_m), ("/", lambda d: d.scales.force_N)),
+    "force": (("/", lambda d: d.scales.force_N),),
+    "mass": (("/", lambda d: d.bar.mass_kg),),
+    "damping": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s),),
 }
+_STEP = {"*": operator.mul, "/": operator.truediv}
+
+
+def convert(scale: str | Callable, drifter, value: float) -> float:
+    r"""An SI value in its scale's units (theory §11, eq. 2): the scale's :data:`SCALE_STEPS` applied
+    to ``value`` in turn (a scale given as a function: ``value`` times its factor).
+
+    Parameters
+    ----------
+    scale : str or callable
+        A name in :data:`SCALE_STEPS`, or a function of the drifter giving the factor from SI.
+    drifter : CircuitDrifter
+        Whose scales (the piston's length and mass, the rear area, :math:`\Omega`).
+    value : float
+        The value in SI (its field's unit).
+
+    Returns
+    -------
+    float
+        Dimensionless.
+
+    Examples
+    --------
+    >>> convert("pressure", None, 12e6), convert("one", None, 1.4)
+    (1.2, 1.4)
+    """
+    if callable(scale):
+        return value * scale(drifter)
+    for step, of in SCALE_STEPS[scale]:
+        value = _STEP[step](value, of(drifter))
+    return value
+
+
+#: Each scale's factor from SI to dimensionless, a function of the drifter (theory §11, eq. 2): its
+#: steps applied to 1 (the factor a continuation's target and a part's fields are multiplied by).
+SCALES: dict[str, Callable] = {name: (lambda d, name=name: convert(name, d, 1.0)) for name in SCALE_STEPS}
 
 
 def fields() -> dict[str, Field]:
@@ -476,12 +520,62 @@ def dimensionless_factor(drifter, key: str) -> float:
         ``[rock]`` section, an accumulator's without an accumulator, the stop's on the rock).
     """
     f = refuse_continuation(key)
-    if f.needs == "rock" and drifter.drill is None:
-        raise ValueError(f"parameter {key} is the drill string's and the rock's: the drifter has no [rock] "
-                         "section")
-    if f.needs == "accumulator" and not drifter.si["accumulator_volume_m3"] > 0.0:
-        raise ValueError(f"parameter {key} is the accumulator's: the drifter has none (no [accumulator] "
-                         "section, or its volume 0)")
-    if f.needs == "stop" and drifter.drill is not None:
-        raise ValueError(f"parameter {key} is the stop's: on the rock the rod-rock law sets the impact")
+    if not has(drifter, f.needs):
+        raise ValueError(f"parameter {key} is {_LACKING[f.needs]}")
     return (SCALES[f.scale] if isinstance(f.scale, str) else f.scale)(drifter)
+
+
+#: What a drifter with its oil circuit must have for a field of each ``needs`` to count.
+_NEEDS = {"": lambda d: True, "rock": lambda d: d.drill is not None, "stop": lambda d: d.drill is None,
+          "accumulator": lambda d: d.si["accumulator_volume_m3"] > 0.0}
+#: Why a field of each ``needs`` does not count for a drifter that lacks it.
+_LACKING = {"rock": "the drill string's and the rock's: the drifter has no [rock] section",
+            "accumulator": "the accumulator's: the drifter has none (no [accumulator] section, or its "
+                           "volume 0)",
+            "stop": "the stop's: on the rock the rod-rock law sets the impact"}
+
+
+def has(drifter, needs: str) -> bool:
+    """Whether ``drifter`` (a drifter with its oil circuit) has what a field's ``needs`` names: a
+    drill string and the rock (``"rock"``), the stop (``"stop"``: no rock), an accumulator of a
+    volume above 0 (``"accumulator"``); always for ``""``.
+
+    Raises
+    ------
+    ValueError
+        A ``needs`` of another kind of machine's (a hammer's force).
+    """
+    if needs not in _NEEDS:
+        raise ValueError(f"needs must be one of {', '.join(map(repr, _NEEDS))} (a circuit's); got {needs!r}")
+    return bool(_NEEDS[needs](drifter))
+
+
+def drive_values(drifter) -> dict[str, dict]:
+    """The circuit drive's parts' dimensionless values for ``drifter`` (theory §11, eq. 2), from the
+    declarations alone: each field the drive holds (``holder="drive"``), its SI value
+    (``drifter.si[f.si]``) converted by its scale's steps (:func:`convert`; ``None`` stays ``None``:
+    no ``switch_in``) into the part and field that the drive's declaration
+    (:data:`impactbar.drives.circuit.parameters.DECLARED`) gives its parameter. A field whose part the
+    drifter lacks (``needs``: an accumulator of no volume) is left out, and so is a part left with
+    none.
+
+    Parameters
+    ----------
+    drifter : CircuitDrifter
+
+    Returns
+    -------
+    dict
+        Part (``"chambers"``, ``"valve"``, ``"supply"``, ``"oil"``, ``"accumulator"``) to its fields'
+        values by the part's field names (the valve's ``coefficient``).
+    """
+    from ..drives.circuit.parameters import DECLARED
+
+    held = {p.name: (p.part, p.field) for p in DECLARED}
+    out: dict[str, dict] = {}
+    for f in FIELDS.values():
+        if f.holder == "drive" and has(drifter, f.needs):
+            part, name = held[f.parameter]
+            x = drifter.si[f.si]
+            out.setdefault(part, {})[name] = None if x is None else convert(f.scale, drifter, x)
+    return out
