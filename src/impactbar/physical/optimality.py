@@ -206,8 +206,9 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     Examples
     --------
     >>> rec = {"constraints": {"mass": {"scaled": 0.0}}}
-    >>> str(certify([1.0, 1.0], [[-1.0, -1.0]], rec, [0.5, 0.5], ["a", "b"], method="exact"))
-    'converged: KKT residual 0 (tolerance 0.01); active: mass; multipliers mass 1'
+    >>> c = certify([1.0, 1.0], [[-1.0, -1.0]], rec, [0.5, 0.5], ["a", "b"], method="exact")
+    >>> c.verdict, c.active, round(c.multipliers["mass"], 12), c.residual < 1e-12  # (its least squares')
+    ('converged', ['mass'], 1.0, True)
     """
     g = np.asarray(objective_gradient, dtype=float)
     names = list(record["constraints"])
