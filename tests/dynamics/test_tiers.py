@@ -207,3 +207,19 @@ def test_a_first_orbit_search_with_an_empty_cache_does_not_compile_the_admissibi
     orbits = _periodic_orbits_general(BarModel(5.0, 0.1, 0.5, 3), SquareWaveLoad(1.0, 1.2))
     assert len(orbits) > 0
     assert first["orbits"] == [[o.phase, o.clearance, o.clearance_error, o.admissibility] for o in orbits]
+
+
+@numba.njit(cache=False)
+def _counts_then_overflows(a, work):
+    a[0] += 1.0
+    work[0] += 1.0
+    return math.exp(a[1])
+
+
+def test_a_twins_work_buffers_are_not_put_back():
+    """Arguments named scratch (work buffers the kernel writes before it reads) are not copied for
+    the twin's call: where the machine code takes the call over, they keep what the twin wrote,
+    while the others start again as they came."""
+    a, work = np.array([0.0, 1000.0]), np.zeros(1)
+    assert _tiers._Twin(_counts_then_overflows, first=True, scratch=(1,))(a, work) == math.inf
+    assert a[0] == 1.0 and work[0] == 2.0

@@ -143,7 +143,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
     from ._admissibility_search import admissibility_search, phase_buffers
 
     # (its twin for the first calls of a process with an empty cache: the same bits, no compile)
-    search = interpreted_first(admissibility_search)
+    search = interpreted_first(admissibility_search, scratch=(8,))  # (8: the phases, work buffers)
     code, v_max, err = search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
                               _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
                               phase_buffers(c.size), (tuple(own.kernel.view), F, P))
