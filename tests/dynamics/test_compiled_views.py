@@ -247,6 +247,8 @@ def test_the_kernel_view_is_the_only_path_from_a_load_into_compiled_code():
         assert not fields & set(inspect.signature(disp.py_func).parameters), full
     # in a fresh process, so that no other test's direct kernel calls add signatures
     code = """
+from impactbar.dynamics.compiled import disable_tiers
+disable_tiers()  # every kernel compiled on its first call (the admissibility search too, cache or not)
 import numba, impactbar.orbits._admissibility_search as A
 import impactbar.dynamics._event_loop as K, impactbar.laws.wave._window as KW
 from impactbar import *  # noqa: F403

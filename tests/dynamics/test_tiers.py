@@ -48,7 +48,8 @@ def _digest(x):
             x.final_state.modal_displacement.tolist(), x.final_state.modal_velocity.tolist()]
 
 
-_FIRST_CALLS = r"""
+# a subprocess's preamble: the names of the kernels numba compiles there, in ``compiled``
+_COUNT = r"""
 import json, sys
 from numba.core import event
 compiled = []
@@ -56,6 +57,9 @@ class Count(event.Listener):
     def on_start(self, ev): pass
     def on_end(self, ev): compiled.append(ev.data["dispatcher"].py_func.__name__)
 event.register("numba:compile", Count())
+"""
+
+_FIRST_CALLS = _COUNT + r"""
 import numba
 from impactbar.dynamics import _tiers
 sys.path.insert(0, sys.argv[1])
@@ -144,3 +148,78 @@ def test_fast_math_kernels_are_never_interpreted():
     fast = [d for d in vars(A).values() if isinstance(d, numba.core.registry.CPUDispatcher)
             and d.targetoptions.get("fastmath")]
     assert fast and not any(_tiers._exact(d) for d in fast)
+
+
+@numba.njit(cache=False)
+def _weighted(a, w):
+    s = 0.0
+    for i in range(a.size):
+        s += math.sin(a[i]) * w
+    return s
+
+
+def test_interpreted_first_runs_the_twin_until_its_budget_is_spent(monkeypatch):
+    """A kernel without machine code runs interpreted (the machine code's bits, nothing compiled)
+    until its twin's calls have cost the budget; then, or once compiled, or with every kernel
+    compiled at once (``impactbar warmup``), the dispatcher itself runs."""
+    monkeypatch.setattr(_tiers, "_FIRST", {})
+    a = np.random.default_rng(3).normal(size=500) * 1e3
+    first = _tiers.interpreted_first(_weighted, budget=60.0)
+    assert isinstance(first, _tiers._Twin)
+    value = first(a, 0.3)
+    assert not _weighted.signatures  # nothing compiled
+    assert 0.0 < _tiers._FIRST[_weighted] < 60.0
+    monkeypatch.setattr(_tiers._PROCESS, "eager", True)
+    assert _tiers.interpreted_first(_weighted, budget=60.0) is _weighted
+    monkeypatch.setattr(_tiers._PROCESS, "eager", False)
+    assert _tiers.interpreted_first(_weighted, budget=_tiers._FIRST[_weighted]) is _weighted
+    assert _tiers.interpreted_first(_weighted, budget=0.0) is _weighted
+    assert _weighted(a, 0.3) == value  # the machine code's bits
+    assert _tiers.interpreted_first(_weighted, budget=60.0) is _weighted  # compiled now
+    with pytest.raises(ValueError, match="budget"):
+        _tiers.interpreted_first(_weighted, budget=-1.0)
+
+
+_SEARCH_FIRST = _COUNT + r"""
+from impactbar import BarModel, SquareWaveLoad
+from impactbar.orbits.one_impact import _periodic_orbits_general
+orbits = _periodic_orbits_general(BarModel(5.0, 0.1, 0.5, 3), SquareWaveLoad(1.0, 1.2))
+print(json.dumps({"orbits": [[o.phase, o.clearance, o.clearance_error, o.admissibility] for o in orbits],
+                  "compiled": compiled}))
+"""
+
+
+def test_a_first_orbit_search_with_an_empty_cache_does_not_compile_the_admissibility_search(
+        tmp_path, monkeypatch):
+    """With an empty numba cache, a process's first orbits take the admissibility search's twin
+    (its compile is the largest of a first computation's): it compiles no search, and its verdicts,
+    clearances and error bounds are the machine code's to the bit."""
+    from impactbar.orbits.one_impact import _periodic_orbits_general
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), IMPACTBAR_TIERED="0",
+               PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = subprocess.run([sys.executable, "-c", _SEARCH_FIRST], env=env, capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    first = json.loads(out.stdout.strip().splitlines()[-1])
+    assert "admissibility_search" not in first["compiled"]  # (on main: it and 13 callees of its own)
+    monkeypatch.setattr(_tiers._PROCESS, "eager", True)  # here: the machine code
+    orbits = _periodic_orbits_general(BarModel(5.0, 0.1, 0.5, 3), SquareWaveLoad(1.0, 1.2))
+    assert len(orbits) > 0
+    assert first["orbits"] == [[o.phase, o.clearance, o.clearance_error, o.admissibility] for o in orbits]
+
+
+@numba.njit(cache=False)
+def _counts_then_overflows(a, work):
+    a[0] += 1.0
+    work[0] += 1.0
+    return math.exp(a[1])
+
+
+def test_a_twins_work_buffers_are_not_put_back():
+    """Arguments named scratch (work buffers the kernel writes before it reads) are not copied for
+    the twin's call: where the machine code takes the call over, they keep what the twin wrote,
+    while the others start again as they came."""
+    a, work = np.array([0.0, 1000.0]), np.zeros(1)
+    assert _tiers._Twin(_counts_then_overflows, first=True, scratch=(1,))(a, work) == math.inf
+    assert a[0] == 1.0 and work[0] == 2.0

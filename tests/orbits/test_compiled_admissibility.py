@@ -15,6 +15,15 @@ from impactbar.orbits.one_impact import _periodic_orbits_general
 from impactbar.orbits.rigid import STATUS, rigid_square_orbits
 
 
+@pytest.fixture(autouse=True)
+def _machine_code(monkeypatch):
+    """The search's machine code from its first call, as after ``impactbar warmup`` (with an empty
+    cache a process's first searches would take its interpreted twin, which gives the same bits)."""
+    from impactbar.dynamics import _tiers
+
+    monkeypatch.setattr(_tiers._PROCESS, "eager", True)
+
+
 def _both(monkeypatch, fn):
     """``fn()`` with the compiled search, then with the numpy search."""
     fast = fn()

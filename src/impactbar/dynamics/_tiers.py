@@ -59,6 +59,9 @@ import numpy as np
 
 #: CPU seconds a process may spend in interpreted twins; past them it compiles what it still needs
 BUDGET = 1.0
+#: CPU seconds a process may spend in the twin of a kernel run by :func:`interpreted_first`, per
+#: kernel, before it compiles the kernel
+FIRST_BUDGET = 1.0
 #: the environment variable that switches the tier on (``"1"``)
 ENV = "IMPACTBAR_TIERED"
 
@@ -82,12 +85,16 @@ class _Process:
         CPU seconds spent in twins.
     next_id : int
         The id of the next request to the child.
+    eager : bool
+        Whether every kernel compiles on its first call (:func:`disable`), those that
+        :func:`interpreted_first` runs included.
     """
 
-    __slots__ = ("on", "cache", "child", "spent", "next_id")
+    __slots__ = ("on", "cache", "child", "spent", "next_id", "eager")
 
     def __init__(self):
         self.on, self.cache, self.child, self.spent, self.next_id = None, None, None, 0.0, 0
+        self.eager = False
 
 
 _PROCESS = _Process()
@@ -97,6 +104,7 @@ _FAILED: set = set()  # request ids the child could not compile
 _TWINS: dict = {}  # dispatcher -> its twin
 _GLOBALS: dict = {}  # id(module dict) -> the twins' globals for that module
 _EXACT: dict = {}  # dispatcher -> whether its twin rounds as its machine code does
+_FIRST: dict = {}  # dispatcher -> CPU seconds its twin spent in calls by interpreted_first
 _ORIGINAL = None  # numba's Dispatcher._compile_for_args
 
 
@@ -108,8 +116,10 @@ def enabled() -> bool:
 
 
 def disable() -> None:
-    """Switch the tier off in this process (``impactbar warmup``: it compiles every kernel here)."""
+    """Switch the tier off in this process, and :func:`interpreted_first` with it (``impactbar
+    warmup``: it compiles every kernel here)."""
     _PROCESS.on = False
+    _PROCESS.eager = True
 
 
 def requested() -> bool:
@@ -177,13 +187,14 @@ class _Twin:
     negative rounding error, any floating-point error numpy would raise), the arguments are put
     back as they came and the machine code runs the call instead (numba compiles it here)."""
 
-    __slots__ = ("disp",)
+    __slots__ = ("disp", "first", "scratch")
 
-    def __init__(self, disp):
-        self.disp = disp
+    def __init__(self, disp, first=False, scratch=()):
+        self.disp, self.first = disp, first  # first: its time counts to interpreted_first's budget
+        self.scratch = scratch  # the positions of arguments whose arrays are not put back
 
     def __call__(self, *args):
-        arrays = _arrays(args, [])
+        arrays = _arrays(tuple(a for i, a in enumerate(args) if i not in self.scratch), [])
         saved = [a.copy() for a in arrays]
         t = time.process_time()
         try:
@@ -195,7 +206,54 @@ class _Twin:
             return _numba(self.disp, args)(*args)
         finally:
             with _LOCK:
-                _PROCESS.spent += time.process_time() - t
+                if self.first:
+                    _FIRST[self.disp] = _FIRST.get(self.disp, 0.0) + time.process_time() - t
+                else:
+                    _PROCESS.spent += time.process_time() - t
+
+
+def interpreted_first(disp, budget: float = FIRST_BUDGET, scratch: tuple = ()):
+    """What runs the next call of the kernel ``disp``, whatever the tier: its machine code where
+    numba holds it, in this process or in its cache, or once the process has spent ``budget`` CPU
+    seconds in its twin (numba compiles it then); else its twin, which gives the machine code's bits.
+
+    For a kernel whose compile costs far more than the calls of a short computation: the
+    admissibility search (theory §5) compiles in some 5 to 9 s of CPU time (with its callees,
+    alone in the process on a 2-core machine) and ``impactbar paper`` calls it 41 times, 0.07 s of
+    CPU time in its twin; a long computation loses at most ``budget`` seconds (and one call) before
+    it takes the machine code. ``impactbar warmup`` (:func:`disable`) compiles it on its first call.
+
+    Parameters
+    ----------
+    disp : numba.core.registry.CPUDispatcher
+        A kernel of impactbar's compiled without fast math (else its machine code always runs; a
+        plain function, such as a test's stand-in, runs as it is).
+    budget : float
+        CPU seconds of its twin's calls in this process after which the kernel is compiled, ``>= 0``.
+    scratch : tuple of int
+        The positions of the arguments whose arrays the kernel writes before it reads them (work
+        buffers): where the twin hands a call to the machine code, they are not put back (the
+        others are, from a copy made at each call; the search's 12 MiB of phases would cost 0.5 s
+        over ``impactbar paper``'s 41 calls).
+
+    Returns
+    -------
+    callable
+        ``disp`` itself, or a call of its twin that counts its CPU time.
+
+    Raises
+    ------
+    ValueError
+        If ``budget`` is negative or not a number.
+    """
+    if not budget >= 0.0:
+        raise ValueError(f"budget must be >= 0 CPU seconds; got {budget!r}")
+    from numba.core.registry import CPUDispatcher
+
+    if (not isinstance(disp, CPUDispatcher) or disp.signatures or _PROCESS.eager
+            or _FIRST.get(disp, 0.0) >= budget or _cached(disp) or not _exact(disp)):
+        return disp
+    return _Twin(disp, first=True, scratch=scratch)
 
 
 def _arrays(x, out: list) -> list:
@@ -219,8 +277,9 @@ def _numba(disp, args):
 
 def _cached(disp) -> bool:
     """Whether numba's cache holds machine code of ``disp`` (its index file exists; a stale one is
-    numba's to recompile, as before)."""
-    return os.path.exists(disp._cache._cache_file._index_path)
+    numba's to recompile, as before; a kernel not cached to disk has none)."""
+    cache_file = getattr(disp._cache, "_cache_file", None)
+    return cache_file is not None and os.path.exists(cache_file._index_path)
 
 
 def _exact(disp) -> bool:

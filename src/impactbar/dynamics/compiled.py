@@ -22,7 +22,9 @@ views of :mod:`impactbar.dynamics.compiled_views`), callable from Python and fro
   :func:`fourier_column`, :func:`piecewise_column`, :func:`bound_column`,
   :func:`end_velocity_bound`;
 - :func:`disable_tiers`: every kernel compiled in this process before its first call runs
-  (``impactbar warmup``).
+  (``impactbar warmup``);
+- :func:`interpreted_first`: a kernel's interpreted twin for its first calls in a process where
+  numba holds no machine code of it, until they have cost a budget of CPU time.
 """
 
 from ._crossing import CROSS as CROSS
@@ -51,8 +53,9 @@ from ._load_flow import fourier_flow as fourier_flow
 from ._load_flow import piecewise_column as piecewise_column
 from ._load_flow import piecewise_flow as piecewise_flow
 from ._tiers import disable as disable_tiers
+from ._tiers import interpreted_first as interpreted_first
 
 __all__ = ["CACHE", "TWO_PI", "load_value", "piece_of", "sort_head", "bound_column", "end_velocity_bound",
            "fourier_column", "fourier_flow", "piecewise_column", "piecewise_flow", "CHATTER", "CONTACT",
            "CROSS", "END", "FAIL", "FAILED", "FULL", "MAXIMP", "NONE", "propagate_views", "find_crossing",
-           "propagate_many", "run_free", "run_free_rigid", "disable_tiers"]
+           "propagate_many", "run_free", "run_free_rigid", "disable_tiers", "interpreted_first"]

@@ -139,11 +139,14 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         nodes, levels, qn, vn = pieces
         P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, vn)
         F = _NO_FOURIER
+    from ..dynamics.compiled import interpreted_first
     from ._admissibility_search import admissibility_search, phase_buffers
 
-    code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
-                                            _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
-                                            phase_buffers(c.size), (tuple(own.kernel.view), F, P))
+    # (its twin for the first calls of a process with an empty cache: the same bits, no compile)
+    search = interpreted_first(admissibility_search, scratch=(8,))  # (8: the phases, work buffers)
+    code, v_max, err = search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
+                              _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
+                              phase_buffers(c.size), (tuple(own.kernel.view), F, P))
     if code:
         raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
     return float(v_max), float(err)
