@@ -15,7 +15,11 @@ name                              fast (default)                       reference
 ``admissibility.bound``           compiled bound of ``|g''|`` inside   numpy bound
                                   the numpy admissibility search
 ``admissibility.search``          whole certified admissibility        numpy search (theory §5)
-                                  search compiled
+                                  search compiled (its interpreted
+                                  twin, the same bits, for a
+                                  process's first CPU second of
+                                  calls while numba has no machine
+                                  code of it)
 ``admissibility.rigid_cosine``    rigid bar's flights under a cosine   the certified search
                                   load: one zero of the velocity per
                                   arc of constant load sign
@@ -79,7 +83,8 @@ __all__ = ["IMPLEMENTATIONS", "use_fast", "use_reference", "implementation", "ch
 IMPLEMENTATIONS: dict[str, str] = {
     "loads.flow": "compiled flows of Fourier and piecewise-constant loads",
     "admissibility.bound": "compiled bound of |g''| inside the numpy admissibility search",
-    "admissibility.search": "whole certified admissibility search compiled",
+    "admissibility.search": "whole certified admissibility search compiled (its interpreted twin first "
+                            "while numba has no machine code of it)",
     "admissibility.rigid_cosine": "rigid bar's clearance under a cosine load from its velocity's zeros",
     "orbits.rigid_scalar": "rigid-bar closed forms in plain floats for one point",
     "orbits.rigid_arrays": "rigid-bar closed forms compiled, point by point over parameter arrays",
