@@ -16,6 +16,7 @@ control chamber switched to the supply or the return by ports the piston uncover
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -262,3 +263,25 @@ def test_a_spool_valve_takes_the_place_of_the_valve_table():
         d.to_dimensionless("valve.switch_out", "20 mm")
     with pytest.raises(ValueError, match=r"needs a valve: a \[valve\] table .* spool_valve\); got neither"):
         build(cfg)
+
+
+def test_a_used_drive_pickles_and_its_copy_finds_the_same_orbit():
+    """A drive that has run (its composed network and its spool's watched events cached: closures)
+    pickles without its caches, every one of them, and the copy finds the same orbit to the bit."""
+    import functools
+    import pickle
+
+    from impactbar.drives.circuit import drive as D
+    from impactbar.physical import load
+
+    cached = {n for n, v in vars(D.HydraulicCircuitDrive).items() if isinstance(v, functools.cached_property)}
+    assert cached == set(D._CACHED)
+    drifter = load(Path(__file__).resolve().parents[2] / "examples" / "circuit_drill_spool.toml")
+    drive, model = drifter.drive(), drifter.model()
+    first = find_orbit(model, drive)
+    assert cached <= set(vars(drive))  # (used: every cache computed)
+    copy = pickle.loads(pickle.dumps(drive))
+    assert copy == drive and not cached & set(vars(copy))
+    again = find_orbit(model, copy)
+    assert (again.period, again.impact_velocity) == (first.period, first.impact_velocity)
+    assert np.array_equal(again.multipliers, first.multipliers)

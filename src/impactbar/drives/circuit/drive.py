@@ -47,6 +47,8 @@ _ACC = "accumulator"
 _REL = "relief"
 #: the events the drive reads itself (the others an extra part's, :func:`.watch.watched`)
 _OWN_EVENTS = (_RAMP, _ACC, _REL)
+#: the drive's caches computed on use (its ``functools.cached_property`` s), left out of its pickle
+_CACHED = ("_composition", "_stand_in", "_watched", "traits")
 
 
 @dataclass(frozen=True)
@@ -202,6 +204,12 @@ class HydraulicCircuitDrive(Drive):
                                  f"compressibility law means nothing), optionally with the valve opening "
                                  f"x_v in [0, 1]; got {self.start_pressures!r}")
             object.__setattr__(self, "start_pressures", sp)
+
+    def __getstate__(self) -> dict:
+        """What pickles: the instance's attributes without the caches computed on use (the composed
+        network, its parts' watched events, whose quantities are closures, the traits), which an
+        unpickled drive computes again."""
+        return {k: v for k, v in self.__dict__.items() if k not in _CACHED}
 
     # -- parameters --------------------------------------------------------------------------------
     def with_(self, **changes) -> HydraulicCircuitDrive:
