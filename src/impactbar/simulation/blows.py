@@ -270,18 +270,8 @@ class BlowSummary(BlowPiece):
         return self._work
 
     def extremes_of(self, ks) -> tuple[np.ndarray, np.ndarray]:
-        """The least and the greatest value of each of the drive's state components ``ks`` over the
-        blow (:meth:`BlowPiece.extremes_of`, kept; :meth:`BlowPiece.extremes` reads them).
-
-        Parameters
-        ----------
-        ks : list of int or str
-            The components (indices or names of the drive's layout).
-
-        Returns
-        -------
-        lows, highs : numpy.ndarray, shape (len(ks),)
-            In model units.
+        """:meth:`BlowPiece.extremes_of` (its parameters and returns) as the blow kept them
+        (:meth:`BlowPiece.extremes` reads them here too).
 
         Raises
         ------
