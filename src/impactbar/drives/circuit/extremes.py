@@ -35,16 +35,17 @@ _REACH_SLACK = 1e-12
 
 
 def hermite_extremes(histories, columns: int) -> tuple[np.ndarray, np.ndarray]:
-    """The least and the greatest value of each of ``columns`` sampled histories over several
+    r"""The least and the greatest value of each of ``columns`` sampled histories over several
     pieces: those of :func:`_hermite_extremes` over each piece's samples and its interpolant's
     stationary points, the same numbers, its cubics solved only on the steps whose interpolant can
     pass the samples' extremes (theory §11, *Limits of this version*: the least pressure).
 
-    On a step of length ``h`` from the value ``a`` to ``b`` with the rates ``a'`` and ``b'``, the
-    interpolant ``a H00 + b H01 + h a' H10 + h b' H11`` (``H00 + H01 = 1``, both in ``[0, 1]``,
-    ``0 <= H10 = s (1 - s)^2 <= 4/27``, ``-4/27 <= H11 <= 0``) lies above ``min(a, b) - 4/27 h
-    (max(-a', 0) + max(b', 0))`` and below the like bound: a step whose bound stays within the
-    least (the greatest) sample holds no stationary value below (above) it, and is skipped.
+    On a step of length :math:`h` from the value :math:`a` to :math:`b` with the rates :math:`a'` and
+    :math:`b'`, the interpolant :math:`a H_{00} + b H_{01} + h a' H_{10} + h b' H_{11}`
+    (:math:`H_{00} + H_{01} = 1`, both in :math:`[0, 1]`, :math:`0 \le H_{10} = s (1 - s)^2 \le 4/27`,
+    :math:`-4/27 \le H_{11} \le 0`) lies above :math:`\min(a, b) - \tfrac{4}{27} h (\max(-a', 0) +
+    \max(b', 0))` and below the like bound: a step whose bound stays within the least (the greatest)
+    sample holds no stationary value below (above) it, and is skipped.
 
     Parameters
     ----------
