@@ -452,10 +452,8 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     settings = settings if settings is not None else drive.traits.integrator
     loop = _Run(model, drive, q, v, t0, t_end, max_imp)
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
-    if M == 1 and float(c @ loop.q) >= 0.0 and abs(float(c @ loop.v)) <= REST_SPEED and \
-            drive.force(loop.state.mode, loop.state.z, loop.q, np.zeros(M)) > 0.0:
-        loop.v = np.zeros(1)  # a start on the stop at rest, the drive pressing: it stays (no arrival to find)
-        _rest(model, drive, loop, t_end, settings)
+    if M == 1 and float(c @ loop.q) >= 0.0 and abs(float(c @ loop.v)) <= REST_SPEED and _pressed(drive, loop):
+        _rest(model, drive, loop, t_end, settings)  # a start on the stop at rest: no arrival to find
     recent: list[float] = []
     while loop.t < t_end and not loop.done:
         fl = fly_and_switch(model, drive, loop, t_end, settings)
@@ -476,25 +474,29 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
             break
         loop.v = v_after
         loop.switch(drive.impact(loop.state.mode, loop.state.z, fl.t, fl.q, v_after), fl.t)
-        mode, z = loop.state
-        pressing = drive.force(mode, z, loop.q, np.zeros(M)) > 0.0
+        pressing = _pressed(drive, loop)
         slow = abs(float(c @ v_after)) <= REST_SPEED * max(1.0, arrival)
         if M > 1 and (len(recent) > CHATTER_IMPACTS or (slow and pressing)):
             raise ValueError(f"the flexible bar is held on the stop at t = {fl.t:.6g} under a drive with "
                              "state: sustained contact is not supported for such a drive yet (use "
                              "n_modes = 0)")
         if M == 1 and slow and pressing:
-            loop.v = np.zeros(1)
             _rest(model, drive, loop, t_end, settings)
     return loop.result(make_state, None)
 
 
+def _pressed(drive, loop) -> bool:
+    """Whether the drive's force, in its state now, presses the bar at rest where it is onto the stop."""
+    return drive.force(loop.state.mode, loop.state.z, loop.q, np.zeros(loop.q.size)) > 0.0
+
+
 def _rest(model, drive, loop, t_end, settings) -> None:
-    """The rigid piston at rest on the stop while the drive presses it: ``z`` integrated with
-    ``q = q' = 0`` until the force turns (falls through 0), a drive event or ``t_end``; with it the
-    drive's own quadratures (its ability :class:`~impactbar.drives.abilities.Quadratures`: the oil
-    circuit's energy account), from 0. A drive whose flights have an integrator of their own (the
-    circuit's CVODE) rests under scipy's ``Radau`` at its tolerances."""
+    """The rigid piston at rest on the stop while the drive presses it (its velocity set to 0 here):
+    ``z`` integrated with ``q = q' = 0`` until the force turns (falls through 0), a drive event or
+    ``t_end``; with it the drive's own quadratures (its ability
+    :class:`~impactbar.drives.abilities.Quadratures`: the oil circuit's energy account), from 0. A
+    drive whose flights have an integrator of their own (the circuit's CVODE) rests under scipy's
+    ``Radau`` at its tolerances."""
     from scipy.integrate import solve_ivp
 
     mode, z = loop.state
