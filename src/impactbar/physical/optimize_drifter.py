@@ -298,11 +298,17 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     elif method == "multistart":
         budget = check_multistart(workers, sample, local_starts, seed, max_evaluations, len(keys))
 
-    def fresh_record(at: dict, **given) -> dict:
-        """The record of the design of changes ``at`` by a fresh ``orbit()`` (no continuation, no
-        cache), with its piston, multipliers and the shank's stress (``given``: its values, changes)."""
+    def fresh_design(at: dict):
+        """The design of changes ``at`` by a fresh ``orbit()`` (no continuation, no cache), or its blow
+        in the ideal limit: the drifter, the record and the orbit (``None`` for a blow)."""
         drifter = build(with_values(cfg, at), folder)
-        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, kept)
+        return (drifter, *((evaluate_blow(drifter, V, limits), None) if ideal else
+                           evaluate_design(drifter, kept)))
+
+    def fresh_record(at: dict, **given) -> dict:
+        """:func:`fresh_design`'s record with its piston, multipliers and the shank's stress (``given``:
+        its values, changes)."""
+        drifter, out, orbit = fresh_design(at)
         out.update(piston_and_multipliers(drifter, orbit), **given,
                    shank_stress=None if ideal else shank_stress(drifter, orbit))
         return out
@@ -487,10 +493,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
 
     def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
-        drifter = build(with_values(cfg, design_of(v).changes), folder)
-        if ideal:
-            return evaluate_blow(drifter, V, limits)
-        record, _ = evaluate_design(drifter, kept)
+        _, record, _ = fresh_design(design_of(v).changes)
         return record
 
     try:  # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)

@@ -176,21 +176,16 @@ def _operating_point(drifter: CircuitDrifter, guess) -> _OperatingPoint:
     """The design's orbit: Newton from ``guess`` where given and it converges, else the default
     chain; and whether it was continued (a valve drifter's as a design map's,
     :func:`~impactbar.physical.drifter.operating_point`)."""
-    if not isinstance(drifter, CircuitDrifter):
-        from .drifter import operating_point
+    from .drifter import operating_point
 
-        if guess is not None:
-            try:
-                return _OperatingPoint(operating_point(drifter, guess), True)
-            except (ValueError, np.linalg.LinAlgError, ArithmeticError):
-                pass
-        return _OperatingPoint(operating_point(drifter), False)
+    solve = drifter.orbit if isinstance(drifter, CircuitDrifter) else \
+        (lambda guess=None: operating_point(drifter, guess))
     if guess is not None:
         try:
-            return _OperatingPoint(drifter.orbit(guess=guess), True)
+            return _OperatingPoint(solve(guess=guess), True)
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):
             pass
-    return _OperatingPoint(drifter.orbit(), False)
+    return _OperatingPoint(solve(), False)
 
 
 def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: dict | None = None) -> dict:
