@@ -569,13 +569,12 @@ def drive_values(drifter) -> dict[str, dict]:
         Part (``"chambers"``, ``"valve"``, ``"supply"``, ``"oil"``, ``"accumulator"``) to its fields'
         values by the part's field names (the valve's ``coefficient``).
     """
-    from ..drives.circuit.parameters import DECLARED
+    from ..drives.circuit.drive import PARAMETERS  # (the declaration's part and field of each parameter)
 
-    held = {p.name: (p.part, p.field) for p in DECLARED}
     out: dict[str, dict] = {}
     for f in FIELDS.values():
         if f.holder == "drive" and has(drifter, f.needs):
-            part, name = held[f.parameter]
+            part, name = PARAMETERS[f.parameter]
             x = drifter.si[f.si]
             out.setdefault(part, {})[name] = None if x is None else convert(f.scale, drifter, x)
     return out
