@@ -143,7 +143,7 @@ class LawTraits:
         The impact is the velocity map ``v -> -r v`` at the arrival's instant, ``r =``
         :meth:`kernel_restitution`, which the solvers apply themselves: the compiled flight kernel
         (chatter and sustained contact the simulator's), the drives' loops, the closed forms of
-        eq. 10 of the position-driven orbits. ``False``: they call the law's
+        eq. 10 of the valve drive's orbits. ``False``: they call the law's
         :meth:`~ContactLaw.contact` and :meth:`~ContactLaw.impact_map` (and its
         :class:`~impactbar.laws.abilities.CoupledBlow`) at each arrival instead (a contact that takes
         time, or one of no duration whose map the kernel cannot apply).
