@@ -366,7 +366,10 @@ WIDER_NOT_RECORDS = {
     "simulation/initial.py": {"q", "v"},
     # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
     # series' last; x: a grid's or state's entries
-    "simulation/simulate.py": {"q", "v", "x"},
+    "simulation/_core.py": {"q", "v", "x"},
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last
+    "simulation/simulate.py": {"q", "v"},
     # _segments: the last segment; q: the modal coordinates: [0] the rigid mode; v: the modal velocities
     # ([0] the rigid mode) or a series' last
     "simulation/trajectory.py": {"_segments", "q", "v"},
@@ -743,7 +746,8 @@ NOT_COLUMN_RECORDS = {
     "simulation/blows.py": {"piece.drive_state([t_end])": ONE_TIME},
     "simulation/driven.py": {"sol.y": LAST_TIME},
     "simulation/driven_trajectory.py": {n: ONE_TIME for n in ("q", "q0", "q1", "v", "v0", "v1")},
-    "simulation/simulate.py": {n: ONE_TIME for n in ("a", "qe", "r", "r2", "rv", "rv2", "ve")},
+    "simulation/_core.py": {n: ONE_TIME for n in ("r2", "rv2")},
+    "simulation/simulate.py": {n: ONE_TIME for n in ("a", "qe", "r", "rv", "ve")},
     "simulation/trajectory.py": {n: ONE_TIME for n in ("qe", "qm", "ve", "vm")},
 }
 

@@ -18,7 +18,7 @@ from impactbar import BarModel, FourierLoad, PositionSwitchedDrive, simulate
 from impactbar.dynamics import _crossing as K
 from impactbar.simulation import InitialState
 
-sim_module = importlib.import_module("impactbar.simulation.simulate")  # (the name is the function's)
+sim_module = importlib.import_module("impactbar.simulation._core")
 
 
 def _pressed_state(model, level, gap):

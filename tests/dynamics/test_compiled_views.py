@@ -93,7 +93,7 @@ def test_pk_assignment_refused_and_each_load_simulated_as_itself():
     """A reported case: ``l.pk = 3.0`` was accepted while the simulator kept integrating pk = 1 (a
     cache keyed by ``id(load)``). It is refused now, and a fresh CosineLoad(0.5, 3.0) simulated after
     CosineLoad(0.5, 1.0) gets its own answer, equal to a run in a clean cache."""
-    S = importlib.import_module("impactbar.simulation.simulate")
+    S = importlib.import_module("impactbar.simulation._core")
     model = BarModel(1.37, 0.02, 0.8, 2)
     start = InitialState.rigid(-0.1, 0.0, 2)
     one = CosineLoad(0.5, 1.0)

@@ -515,7 +515,7 @@ def test_simulation_core_is_built_once_and_runs_are_unchanged():
 
     from impactbar import InitialState, simulate
 
-    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    sim_module = importlib.import_module("impactbar.simulation._core")
 
     model, load = BarModel(1.37, 0.02, 0.8, 3), CosineLoad(1.2, 1.0)
     start = InitialState.rigid(-0.05, 0.0, 3)
@@ -596,7 +596,7 @@ def _random_rigid_run(rng):
 
     from impactbar import InitialState, simulate
 
-    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    sim_module = importlib.import_module("impactbar.simulation._core")
     k = int(rng.integers(1, 4))
     d, R, p0, pk = _random_rigid_case(rng, k)
     model, load = BarModel(2.0, d, R, 0), CosineLoad(p0, pk, k)
@@ -707,7 +707,7 @@ def test_modal_impact_search_equals_general_search(rng, n_modes):
     from impactbar import InitialState, simulate
     from impactbar.dynamics import _crossing as K
 
-    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    sim_module = importlib.import_module("impactbar.simulation._core")
     n_flights = n_slow = 0
     for _ in range(12 if n_modes < 40 else 4):
         s = rng.uniform(0.5, 3.0)

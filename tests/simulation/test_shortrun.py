@@ -14,6 +14,7 @@ from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, Trajec
 from impactbar.dynamics.implementations import use_reference
 
 S = importlib.import_module("impactbar.simulation.simulate")
+C = importlib.import_module("impactbar.simulation._core")
 
 _RIGID, _BAR8 = BarModel(1.37, 0.02, 0.8, 0), BarModel(1.37, 0.02, 0.8, 8)
 _PNEU = CosineLoad(1.2, 1.0)
@@ -141,14 +142,14 @@ def test_short_run_path_is_taken_and_left(monkeypatch):
 
 def test_the_last_core_is_found_by_identity_and_forgotten_with_the_cache():
     model, load = BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0)
-    core = S._core_for(model, load)
-    assert S._core_for(model, load) is core
-    assert S._core_for(BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0)) is core  # equal values
-    assert S._core_for(model, CosineLoad(1.2, 3.0)) is not core
-    assert S._core_for(model, load) is core
-    for k in range(2 * S._CORES_MAX):  # the cache keeps its size
-        S._core_for(model, CosineLoad(1.2, 1.0 + k))
-    assert len(S._CORES) == S._CORES_MAX + 1 and S._LAST in S._CORES  # the pairs and the last call
-    core = S._core_for(model, load)
-    S._CORES.clear()
-    assert S._core_for(model, load) is not core  # the last call's entry went with the cache
+    core = C._core_for(model, load)
+    assert C._core_for(model, load) is core
+    assert C._core_for(BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0)) is core  # equal values
+    assert C._core_for(model, CosineLoad(1.2, 3.0)) is not core
+    assert C._core_for(model, load) is core
+    for k in range(2 * C._CORES_MAX):  # the cache keeps its size
+        C._core_for(model, CosineLoad(1.2, 1.0 + k))
+    assert len(C._CORES) == C._CORES_MAX + 1 and C._LAST in C._CORES  # the pairs and the last call
+    core = C._core_for(model, load)
+    C._CORES.clear()
+    assert C._core_for(model, load) is not core  # the last call's entry went with the cache

@@ -16,7 +16,7 @@ from impactbar import (
     SquareWaveLoad,
     simulate,
 )
-from impactbar.simulation.simulate import _Core
+from impactbar.simulation._core import _Core
 from modal_reference import solve_modal
 
 TWO_PI = 2.0 * math.pi

@@ -23,7 +23,8 @@ from ..loads import Load
 from ..model import BarModel
 
 if TYPE_CHECKING:
-    from .simulate import InitialState, _Core
+    from ._core import _Core
+    from .simulate import InitialState
 
 __all__ = ["Trajectory", "EnergyAccount"]
 
