@@ -281,11 +281,13 @@ WHY_DRILL = (
 WHY_SPOOL = (
     "the spool drill's orbit takes 415 flights against the preset's 59 (27 to 29 a period against 4: "
     "the spool's stops, its main ports' two kinks and its pilot ports' four, the cushion's and the "
-    "check valve's each end one), each with some 0.3 ms of Python around CVODE's call (0.14 s of its "
-    "0.35 s), and 41,600 of CVODE's steps against 18,000, each dearer (10 states against 6: a "
-    "variational step some 27 us against 8 us). Its start (10 periods) and the variational period "
-    "(6,700 steps, the Jacobian carried) are cut; the kinks' flights and the Python per flight are "
-    "what is left (benchmarks/HISTORY.md)")
+    "check valve's each end one), each with some 0.3 ms of Python around CVODE's call, and 41,600 of "
+    "CVODE's steps against 18,000, each dearer (10 states against 6). Taking the spool's six kinks "
+    "inside the flights (the openings clipped in the laws, no events) was measured and not kept: 237 "
+    "flights, but 48,700 steps, twice the error-test failures and four times the Newton failures "
+    "where CVODE steps across a kink, the same CPU time; and a light fast spool's flights failed at "
+    "its pilot kinks. Left: restarting CVODE at a kink inside the compiled flight loop, without "
+    "Python (benchmarks/HISTORY.md)")
 
 #: (goal, script, its arguments (``{ref}`` the git ref, ``{src}`` its exported package tree),
 #: the rows that hold the goal's numbers: ``(label, bound, why)``, this tree's number on the row
