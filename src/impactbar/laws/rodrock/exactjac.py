@@ -11,6 +11,10 @@ differentiated, a piecewise-constant load's jumps as impulses; a load of neither
 differences of two blows). ``2 N + 2`` tangent runs, each cheaper than a blow (no switch is
 searched), instead of the ``4 N + 6`` blows of central differences.
 
+The same runs give the derivative of the wave arriving at the piston's driven end over the blow
+(``tangents``' ``arriving``: its smooth part, and the impulses a moving re-contact sends there), the
+blow's part of the tangent of a blow whose drive answers that wave (theory §11, "The coupled blow").
+
 Where the schedule cannot be held (a re-contact at zero closing speed, where the map has no
 derivative; a switch search the primal gave up) :func:`exact_impact_map` returns ``None`` and the
 caller falls back on central differences.
@@ -32,7 +36,9 @@ from ._records import (  # the records' slots and the pool's columns
     END_PPERM,
     END_SEPS,
     END_SHANK,
+    ICH_TAIL,
     IMP_COLS,
+    IMP_DIR,
     NSF_GAP,
     NSF_SHANK,
     PI_COUNT,
@@ -50,6 +56,7 @@ from ._records import (  # the records' slots and the pool's columns
     PR_ZBIT,
     RD_FULL,
     RD_HEAD,
+    TCUR_N,
     TCUR_SIZE,
     WS_BS,
     WS_CI,
@@ -111,9 +118,10 @@ def _bound(pieces, reach):
                   axis=0)
 
 
-def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=False):
+def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=False, arriving=None):
     """Tangent runs of a primal blow along ``K`` directions of its data, all in one compiled call
-    (:func:`~impactbar.laws.rodrock._exacttangent.t_batch`).
+    (:func:`~impactbar.laws.rodrock._exacttangent.t_batch`), or one a direction where the wave
+    arriving at the piston's driven end is wanted (``arriving``).
 
     Parameters
     ----------
@@ -133,6 +141,11 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
         at ``t`` (the step moves by ``-w/jump``).
     on_stop : bool
         Whether the primal's end was put back on the stop.
+    arriving : array_like, shape (n,), optional
+        Times from the impact (model units, in ``[0, T_0 + t_max]``, ``T_0`` the travel time of the
+        piston's first segment) at which the derivative of the left-going wave ``G_0`` arriving at
+        the piston's driven end is wanted (theory §11, "The coupled blow": the wave the drive meets,
+        :mod:`~impactbar.laws.rodrock.coupled_exact`).
 
     Returns
     -------
@@ -140,6 +153,12 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
         The derivatives of the state after the blow.
     set_off : numpy.ndarray, shape (K, 2)
         The separations and the unloadings that a moving step set off, per run.
+    dG : numpy.ndarray, shape (K, n)
+        With ``arriving`` only: the derivative of ``G_0`` at those times, without its impulses.
+    pulses : list of K arrays of shape (m, 2)
+        With ``arriving`` only: the impulses (Dirac terms) of the derivative of ``G_0``, rows
+        ``(arrival time at the driven end, weight)`` in time order: where a moving re-contact moves
+        a jump of ``G_0`` by ``dt``, the weight is ``-[G_0] dt`` (the module's text).
 
     None where the schedule cannot be held.
     """
@@ -195,7 +214,11 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
               np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(TCUR_SIZE, dtype=np.int64))
         out = np.zeros((K, n_p, M, 2), dtype=complex)
         ends = np.zeros((K, END_COLS))
-        _, status = TG.t_batch(wt, tg, template, slots, coefs, imps, out, ends, travel, om)
+        if arriving is None:
+            _, status = TG.t_batch(wt, tg, template, slots, coefs, imps, out, ends, travel, om)
+        else:
+            status, dG, pulses = _arriving_runs(wt, tg, template, slots, coefs, imps, out, ends, travel, om,
+                                                np.asarray(arriving, dtype=float) - travel[0])
         if status == 0:
             break
         if status == 3:
@@ -209,7 +232,57 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     dq, dv = modal_state(basis, out, bmap._end(ends[:, END_SHANK], ends[:, END_GAP], ends[:, END_PPERM]))
     if on_stop:
         dq[:, 0] -= dq @ basis.end_weights
-    return dq, dv, ends[:, END_SEPS:].astype(int)
+    if arriving is None:
+        return dq, dv, ends[:, END_SEPS:].astype(int)
+    for d in range(K):
+        pulses[d][:, 0] += travel[0]
+        pulses[d][:, 1] *= scales[d]
+    return dq, dv, ends[:, END_SEPS:].astype(int), dG * scales[:, None], pulses
+
+
+def _arriving_runs(wt, tg, template, slots, coefs, imps, out, ends, travel, om, emitted):
+    """:func:`~impactbar.laws.rodrock._exacttangent.t_batch` one direction at a time, and after each
+    run its piston's first left-going wave (channel 1) at the times ``emitted`` (from its emission
+    at the far end of segment 0) and that channel's impulses, ``(emission time, weight)`` rows (the
+    run's own scale). Returns ``(status, dG, pulses)``: ``t_batch``'s status (nonzero: the caller's
+    retry), the values, shape ``(K, n)``, and the K impulse arrays."""
+    from .exactresult import _eval_channel
+
+    K = coefs.shape[0]
+    dG = np.zeros((K, emitted.size))
+    pulses = []
+    lamk = np.zeros(3)  # (the values only: no rock's force asked)
+    for d in range(K):
+        mine = imps[imps[:, IMP_DIR] == d].copy()
+        mine[:, IMP_DIR] = 0.0
+        _, status = TG.t_batch(wt, tg, template, slots, coefs[d:d + 1], mine, out[d:d + 1], ends[d:d + 1],
+                               travel, om)
+        if status != 0:
+            return status, None, None
+        PF, PI, TK, TC, _, CHI = wt[:6]
+        # the pool keeps a wave channel's pieces from its first, the c-th piece (exactresult)
+        dG[d] = _eval_channel((PF, PI, TK, TC, CHI, wt[8], lamk), 1, emitted, 0, head=1)
+        pulses.append(_channel_impulses(tg, 1))
+    return 0, dG, pulses
+
+
+def _channel_impulses(tg, c):
+    """Every impulse emitted on channel ``c`` in a tangent run, received or not: ``(emission time,
+    weight)`` rows in order (the queue's head moves on as they are received, its tail and the links
+    stay: the chain walked back from the tail)."""
+    IT, IW, _, IN, ICH, TCUR = tg
+    n = int(TCUR[TCUR_N])
+    before = np.full(n, -1, dtype=np.int64)
+    links = IN[:n]
+    has = links >= 0
+    before[links[has]] = np.flatnonzero(has)
+    chain = []
+    i = int(ICH[c, ICH_TAIL])
+    while i >= 0:
+        chain.append(i)
+        i = int(before[i])
+    chain = np.array(chain[::-1], dtype=np.int64)
+    return np.column_stack((IT[chain], IW[chain])) if chain.size else np.zeros((0, 2))
 
 
 def _time_direction(bmap):
