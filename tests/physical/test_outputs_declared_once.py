@@ -21,7 +21,7 @@ from impactbar.sweeps.map_task import EDGE_FLAGS
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "impactbar"
 #: the SI layers, whose tools read the registry
-LAYERS = ("physical", "sweeps", "cli")
+LAYERS = ("physical", "sweeps", "cli", "continuation")
 #: the modules that compute the figures the registry reads (a blow's, the rock's, a run's records),
 #: and the registry itself
 PRODUCERS = {"physical/outputs.py", "physical/rock.py", "physical/piston.py", "physical/results.py"}

@@ -15,6 +15,7 @@ from .. import physical
 from ..physical.circuit_graph import part_lines
 from ..physical.config import config_kind, read_toml
 from ..physical.display_units import format_key
+from ..physical.outputs import OUTPUTS
 from ..physical.tree import FIELDS
 from ..physical.units import to_si
 from ._common import json_ready, print_json, require
@@ -150,15 +151,35 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
     return _print_orbit(args, drifter, _circuit_header, _circuit_line)
 
 
+def _said(s: dict, name: str, words: str, fmt: str = ".4g") -> str:
+    """``"words value unit"``: the output ``name``'s value in the summary ``s``, under its key and in its
+    display unit as the registry (:mod:`~impactbar.physical.outputs`) declares them."""
+    o = OUTPUTS[name]
+    unit = "" if o.shown_unit in ("", "1") else f" {o.shown_unit}"
+    return f"{words} {s[o.shown_key]:{fmt}}{unit}"
+
+
+def _motion(s: dict) -> str:
+    """The blows' frequency, velocity and energy: the line's start for both drifters."""
+    return ", ".join([_said(s, "blow_frequency", "blow frequency"),
+                      _said(s, "impact_velocity", "impact velocity"),
+                      _said(s, "impact_energy", "impact energy")])
+
+
+def _stability(s: dict) -> str:
+    """Stable or not, and the first non-trivial multiplier's modulus."""
+    return f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})"
+
+
 def _circuit_line(s: dict) -> str:
-    return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, impact power "
-            f"{s['impact_power_kW']:.4g} kW, mean supply pressure {s['mean_supply_pressure_MPa']:.4g} MPa, "
-            f"pump power {s['pump_power_kW']:.4g} kW, hydraulic efficiency {s['hydraulic_efficiency']:.3f} "
-            "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), least "
-            f"pressure {s['minimum_pressure_MPa']:.4g} MPa"
+    return (f"  {_motion(s)}, {_said(s, 'impact_power', 'impact power')}, "
+            f"{_said(s, 'mean_supply_pressure', 'mean supply pressure')}, "
+            f"{_said(s, 'pump_power', 'pump power')}, "
+            f"{_said(s, 'hydraulic_efficiency', 'hydraulic efficiency', '.3f')} "
+            "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), "
+            f"{_said(s, 'minimum_pressure', 'least pressure')}"
             + (" (cavitates)" if s["cavitates"] else "")
-            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})\n"
+            + f", {_stability(s)}\n"
             + f"  {_borders_line(s)}" + _added_line(s))
 
 
@@ -175,22 +196,25 @@ def _added_line(s: dict) -> str:
 
 def _borders_line(s: dict) -> str:
     """The relief valve's opening and the accumulator's emptying over the period, from the orbit's
-    border margins (MPa; infinite where the circuit has no such part)."""
-    relief, acc = s["relief_margin_MPa"], s["accumulator_margin_MPa"]
+    border margins (in their display unit, MPa; infinite where the circuit has no such part)."""
+    relief_, acc_ = OUTPUTS["relief_margin"], OUTPUTS["accumulator_margin"]
+    relief, acc, unit = s[relief_.shown_key], s[acc_.shown_key], relief_.shown_unit
     if relief == float("inf"):
         words = ["no relief valve"]
     elif relief < 0.0:
-        words = [f"the relief valve opens (the supply pressure reaches {-relief:.4g} MPa above its setting)"]
-    else:
-        words = [f"the relief valve stays shut (the supply pressure peaks {relief:.4g} MPa below its "
+        words = [f"the relief valve opens (the supply pressure reaches {-relief:.4g} {unit} above its "
                  "setting)"]
+    else:
+        words = [f"the relief valve stays shut (the supply pressure peaks {relief:.4g} {unit} below its "
+                 "setting)"]
+    unit = acc_.shown_unit
     if acc == float("inf"):
         words.append("no accumulator")
     elif acc < 0.0:
-        words.append(f"the accumulator empties (the supply pressure falls {-acc:.4g} MPa below its "
+        words.append(f"the accumulator empties (the supply pressure falls {-acc:.4g} {unit} below its "
                      "pre-charge)")
     else:
-        words.append(f"the accumulator never empties (the supply pressure stays {acc:.4g} MPa above its "
+        words.append(f"the accumulator never empties (the supply pressure stays {acc:.4g} {unit} above its "
                      "pre-charge)")
     return "; ".join(words)
 
@@ -237,10 +261,8 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
 
 
 def _line(s: dict) -> str:
-    return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, "
-            f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
-            f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+    return (f"  {_motion(s)}, {_said(s, 'percussive_power', 'percussive power')}, {s['admissibility']}, "
+            f"{_stability(s)}")
 
 
 def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: float) -> int:
