@@ -151,12 +151,13 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
     return _print_orbit(args, drifter, _circuit_header, _circuit_line)
 
 
-def _said(s: dict, name: str, words: str, fmt: str = ".4g") -> str:
-    """``"words value unit"``: the output ``name``'s value in the summary ``s``, under its key and in its
-    display unit as the registry (:mod:`~impactbar.physical.outputs`) declares them."""
+def _said(s: dict, name: str, words: str = "", fmt: str = ".4g") -> str:
+    """``"words value unit"``: the output ``name``'s value in the summary ``s`` (an operating point's or
+    a run's), under its key and in its display unit as the registry (:mod:`~impactbar.physical.outputs`)
+    declares them."""
     o = OUTPUTS[name]
     unit = "" if o.shown_unit in ("", "1") else f" {o.shown_unit}"
-    return f"{words} {s[o.shown_key]:{fmt}}{unit}"
+    return f"{words} " * bool(words) + f"{s[o.shown_key]:{fmt}}{unit}"
 
 
 def _motion(s: dict) -> str:
@@ -283,10 +284,10 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
     written = _drifter_figures(drifter, tr, out)
     print(f"{drifter.name or 'drifter'}: {tr.n_impacts} impacts in {tr.t_end / om:.4g} s; second half: "
-          f"{s['blow_frequency_Hz']:.4g} Hz, {s['impact_velocity_m_s']:.4g} m/s, "
-          f"{s['impact_energy_J']:.4g} J per blow, {s['percussive_power_kW']:.4g} kW"
-          + (f"; on rock {s['work_on_rock_J']:.4g} J and {s['penetration_mm']:.4g} mm per blow, "
-             f"{s['drilling_rate_m_min']:.4g} m/min" if "drilling_rate_m_min" in s else "")
+          f"{_said(s, 'blow_frequency')}, {_said(s, 'impact_velocity')}, "
+          f"{_said(s, 'impact_energy')} per blow, {_said(s, 'percussive_power')}"
+          + (f"; on rock {_said(s, 'work_on_rock')} and {_said(s, 'penetration')} per blow, "
+             f"{_said(s, 'drilling_rate')}" if OUTPUTS["drilling_rate"].shown_key in s else "")
           + f"; wrote {out}/{written}, impacts.csv, summary.json")
     return 0
 
@@ -313,12 +314,12 @@ def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_
     rows = [",".join(keys)] + [",".join(f"{x:.9g}" for x in row) for row in zip(*(h[k] for k in keys),
                                                                               strict=True)]
     (out / "pressures.csv").write_text("\n".join(rows) + "\n")
-    last = v[len(v) // 2:]
+    last, least = v[len(v) // 2:], OUTPUTS["minimum_pressure"]
     summary = {"duration_s": float(args.periods * point.period_s), "n_impacts": int(t.size),
                "last_impact_velocity_m_s": float(v[-1]) if v.size else None,
                "mean_impact_energy_second_half_J": float(np.mean(0.5 * m * last ** 2)) if last.size else None,
                "operating_point": point.summary(),
-               "minimum_pressure_MPa": float(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa")) / 1e6)}
+               least.shown_key: float(least.shown(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa"))))}
     if drifter.drill is not None:
         half = slice(len(v) // 2, None)
         summary.update({f"mean_{k}_second_half": float(np.mean(cols[k][half])) if last.size else None
