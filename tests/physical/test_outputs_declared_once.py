@@ -183,3 +183,34 @@ def test_the_shared_outputs_read_one_declaration():
     stored = map_variables("circuit", False)
     assert settle["impact_velocity"].units == stored["impact_velocity"].units == "m/s"
     assert settle["blow_frequency_spread"].units == "Hz"
+
+
+#: the CLI's functions that print a run's own figures (a hammer's run, the per-impact columns of a
+#: circuit's run), not an operating point's outputs
+RUNS = {("cli/simulate.py", None), ("cli/drifter.py", "run_circuit_simulate")}
+
+
+def keys_with_units(source: str, keys: set) -> list:
+    """``(line, where, key)`` of each string literal of ``source`` (an f-string's subscript too) that is
+    one of ``keys``, ``where`` the enclosing top-level function."""
+    found = []
+    for top in ast.parse(source).body:
+        for sub in ast.walk(top):
+            if isinstance(sub, ast.Constant) and sub.value in keys:
+                found.append((sub.lineno, getattr(top, "name", None), sub.value))
+    return found
+
+
+def test_the_cli_reads_keys_and_display_units_from_the_registry():
+    """The CLI's lines of an operating point name no output's key with its unit (``blow_frequency_Hz``,
+    ``mean_supply_pressure_MPa``): they read the key and the display unit from the registry."""
+    keys = {k for o in OUTPUTS.values() for k in (o.key, o.shown_key) if k != o.name}
+    bad = []
+    for path in sorted((SRC / "cli").rglob("*.py")):
+        rel = path.relative_to(SRC).as_posix()
+        found = keys_with_units(path.read_text(), keys)
+        bad += [f"{rel}:{line} ({where}): {key}" for line, where, key in found
+                if (rel, None) not in RUNS and (rel, where) not in RUNS]
+    assert not bad, "keys with their units written in the CLI:\n" + "\n".join(bad)
+    planted = "def line(s):\n    return f\"{s['pump_power_kW']:.4g} kW\"\n"
+    assert keys_with_units(planted, keys) == [(2, "line", "pump_power_kW")]

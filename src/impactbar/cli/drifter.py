@@ -236,10 +236,10 @@ def _print_orbit(args, drifter, header, line) -> int:
 
 
 def _print_rock(r: dict) -> None:
-    print(f"  per blow: work on rock {r['work_on_rock_J']:.4g} J, "
-          f"penetration {r['penetration_mm']:.4g} mm, "
+    print(f"  per blow: {_said(r, 'work_on_rock', 'work on rock')}, "
+          f"{_said(r, 'penetration', 'penetration')}, "
           f"efficiency {r['efficiency']:.3f} ({r['efficiency_with_rebound']:.3f} with the rebound "
-          f"credited); drilling rate {r['drilling_rate_m_min']:.4g} m/min")
+          f"credited); {_said(r, 'drilling_rate', 'drilling rate')}")
 
 
 def _header(d: physical.Drifter) -> str:
