@@ -54,6 +54,7 @@ def _shown(declared: Field, label: str) -> Field:
     factor, unit = display_unit(declared.units)
     return dataclasses.replace(declared, label=f"{label}/{unit}", scale=float(round(1.0 / factor)))
 
+
 #: The declared fields of :class:`PhysicalOrbit`: the orbit's in SI (generated from
 #: :data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the hammer's figures per blow; a figure that is
 #: an output of a drifter (:data:`impactbar.physical.outputs.OUTPUTS`) takes its name and unit from it

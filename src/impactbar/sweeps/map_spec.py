@@ -70,6 +70,7 @@ REASON_CHARS = 200
 #: the status codes of a point
 STATUS = {0: "orbit found", 1: "no orbit (ValueError)", 2: "failed (another error)"}
 
+
 def _cf_output_unit(unit: str) -> str:
     """An output's SI unit as a CF ``units`` string (a flag's ``""`` stays)."""
     return unit.replace("**", "").replace(" ", "")
