@@ -30,7 +30,7 @@ PRODUCERS = {"physical/outputs.py", "physical/rock.py", "physical/piston.py", "p
 ALLOWED = {("physical/optimize_problem.py", "DEFAULT_CONSTRAINTS"),
            ("physical/optimize_problem.py", "IDEAL_CONSTRAINTS"),
            ("physical/optimize_outputs.py", "_CONSTRAINTS"),
-           ("physical/drifter.py", "simulate"), ("cli/drifter.py", "run_circuit_simulate")}
+           ("cli/drifter.py", "run_circuit_simulate")}
 
 
 def _names() -> set:
