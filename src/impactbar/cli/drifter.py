@@ -15,6 +15,7 @@ from .. import physical
 from ..physical.circuit_graph import part_lines
 from ..physical.config import config_kind, read_toml
 from ..physical.display_units import format_key
+from ..physical.outputs import OUTPUTS
 from ..physical.tree import FIELDS
 from ..physical.units import to_si
 from ._common import json_ready, print_json, require
@@ -150,15 +151,36 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
     return _print_orbit(args, drifter, _circuit_header, _circuit_line)
 
 
+def _said(s: dict, name: str, words: str = "", fmt: str = ".4g") -> str:
+    """``"words value unit"``: the output ``name``'s value in the summary ``s`` (an operating point's or
+    a run's), under its key and in its display unit as the registry (:mod:`~impactbar.physical.outputs`)
+    declares them."""
+    o = OUTPUTS[name]
+    unit = "" if o.shown_unit in ("", "1") else f" {o.shown_unit}"
+    return f"{words} " * bool(words) + f"{s[o.shown_key]:{fmt}}{unit}"
+
+
+def _motion(s: dict) -> str:
+    """The blows' frequency, velocity and energy: the line's start for both drifters."""
+    return ", ".join([_said(s, "blow_frequency", "blow frequency"),
+                      _said(s, "impact_velocity", "impact velocity"),
+                      _said(s, "impact_energy", "impact energy")])
+
+
+def _stability(s: dict) -> str:
+    """Stable or not, and the first non-trivial multiplier's modulus."""
+    return f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})"
+
+
 def _circuit_line(s: dict) -> str:
-    return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, impact power "
-            f"{s['impact_power_kW']:.4g} kW, mean supply pressure {s['mean_supply_pressure_MPa']:.4g} MPa, "
-            f"pump power {s['pump_power_kW']:.4g} kW, hydraulic efficiency {s['hydraulic_efficiency']:.3f} "
-            "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), least "
-            f"pressure {s['minimum_pressure_MPa']:.4g} MPa"
+    return (f"  {_motion(s)}, {_said(s, 'impact_power', 'impact power')}, "
+            f"{_said(s, 'mean_supply_pressure', 'mean supply pressure')}, "
+            f"{_said(s, 'pump_power', 'pump power')}, "
+            f"{_said(s, 'hydraulic_efficiency', 'hydraulic efficiency', '.3f')} "
+            "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), "
+            f"{_said(s, 'minimum_pressure', 'least pressure')}"
             + (" (cavitates)" if s["cavitates"] else "")
-            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})\n"
+            + f", {_stability(s)}\n"
             + f"  {_borders_line(s)}" + _added_line(s))
 
 
@@ -175,22 +197,25 @@ def _added_line(s: dict) -> str:
 
 def _borders_line(s: dict) -> str:
     """The relief valve's opening and the accumulator's emptying over the period, from the orbit's
-    border margins (MPa; infinite where the circuit has no such part)."""
-    relief, acc = s["relief_margin_MPa"], s["accumulator_margin_MPa"]
+    border margins (in their display unit, MPa; infinite where the circuit has no such part)."""
+    relief_, acc_ = OUTPUTS["relief_margin"], OUTPUTS["accumulator_margin"]
+    relief, acc, unit = s[relief_.shown_key], s[acc_.shown_key], relief_.shown_unit
     if relief == float("inf"):
         words = ["no relief valve"]
     elif relief < 0.0:
-        words = [f"the relief valve opens (the supply pressure reaches {-relief:.4g} MPa above its setting)"]
-    else:
-        words = [f"the relief valve stays shut (the supply pressure peaks {relief:.4g} MPa below its "
+        words = [f"the relief valve opens (the supply pressure reaches {-relief:.4g} {unit} above its "
                  "setting)"]
+    else:
+        words = [f"the relief valve stays shut (the supply pressure peaks {relief:.4g} {unit} below its "
+                 "setting)"]
+    unit = acc_.shown_unit
     if acc == float("inf"):
         words.append("no accumulator")
     elif acc < 0.0:
-        words.append(f"the accumulator empties (the supply pressure falls {-acc:.4g} MPa below its "
+        words.append(f"the accumulator empties (the supply pressure falls {-acc:.4g} {unit} below its "
                      "pre-charge)")
     else:
-        words.append(f"the accumulator never empties (the supply pressure stays {acc:.4g} MPa above its "
+        words.append(f"the accumulator never empties (the supply pressure stays {acc:.4g} {unit} above its "
                      "pre-charge)")
     return "; ".join(words)
 
@@ -211,10 +236,10 @@ def _print_orbit(args, drifter, header, line) -> int:
 
 
 def _print_rock(r: dict) -> None:
-    print(f"  per blow: work on rock {r['work_on_rock_J']:.4g} J, "
-          f"penetration {r['penetration_mm']:.4g} mm, "
+    print(f"  per blow: {_said(r, 'work_on_rock', 'work on rock')}, "
+          f"{_said(r, 'penetration', 'penetration')}, "
           f"efficiency {r['efficiency']:.3f} ({r['efficiency_with_rebound']:.3f} with the rebound "
-          f"credited); drilling rate {r['drilling_rate_m_min']:.4g} m/min")
+          f"credited); {_said(r, 'drilling_rate', 'drilling rate')}")
 
 
 def _header(d: physical.Drifter) -> str:
@@ -237,10 +262,8 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
 
 
 def _line(s: dict) -> str:
-    return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, "
-            f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
-            f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+    return (f"  {_motion(s)}, {_said(s, 'percussive_power', 'percussive power')}, {s['admissibility']}, "
+            f"{_stability(s)}")
 
 
 def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: float) -> int:
@@ -261,10 +284,10 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
     written = _drifter_figures(drifter, tr, out)
     print(f"{drifter.name or 'drifter'}: {tr.n_impacts} impacts in {tr.t_end / om:.4g} s; second half: "
-          f"{s['blow_frequency_Hz']:.4g} Hz, {s['impact_velocity_m_s']:.4g} m/s, "
-          f"{s['impact_energy_J']:.4g} J per blow, {s['percussive_power_kW']:.4g} kW"
-          + (f"; on rock {s['work_on_rock_J']:.4g} J and {s['penetration_mm']:.4g} mm per blow, "
-             f"{s['drilling_rate_m_min']:.4g} m/min" if "drilling_rate_m_min" in s else "")
+          f"{_said(s, 'blow_frequency')}, {_said(s, 'impact_velocity')}, "
+          f"{_said(s, 'impact_energy')} per blow, {_said(s, 'percussive_power')}"
+          + (f"; on rock {_said(s, 'work_on_rock')} and {_said(s, 'penetration')} per blow, "
+             f"{_said(s, 'drilling_rate')}" if OUTPUTS["drilling_rate"].shown_key in s else "")
           + f"; wrote {out}/{written}, impacts.csv, summary.json")
     return 0
 
@@ -291,12 +314,12 @@ def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_
     rows = [",".join(keys)] + [",".join(f"{x:.9g}" for x in row) for row in zip(*(h[k] for k in keys),
                                                                               strict=True)]
     (out / "pressures.csv").write_text("\n".join(rows) + "\n")
-    last = v[len(v) // 2:]
+    last, least = v[len(v) // 2:], OUTPUTS["minimum_pressure"]
     summary = {"duration_s": float(args.periods * point.period_s), "n_impacts": int(t.size),
                "last_impact_velocity_m_s": float(v[-1]) if v.size else None,
                "mean_impact_energy_second_half_J": float(np.mean(0.5 * m * last ** 2)) if last.size else None,
                "operating_point": point.summary(),
-               "minimum_pressure_MPa": float(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa")) / 1e6)}
+               least.shown_key: float(least.shown(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa"))))}
     if drifter.drill is not None:
         half = slice(len(v) // 2, None)
         summary.update({f"mean_{k}_second_half": float(np.mean(cols[k][half])) if last.size else None

@@ -258,8 +258,14 @@ class Drifter(_ScaledDrifter):
         ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, :math:`m v^2 / 2` of the rigid
         mode's arrival), ``percussive_power_kW``; with a drill string also the means per blow of
         ``work_on_rock_J``, ``penetration_mm`` and ``efficiency``, and ``drilling_rate_m_min``
-        (the mean penetration times the blow frequency)."""
+        (the mean penetration times the blow frequency): each output's under its key and in its display
+        unit as the registry declares them (:mod:`~impactbar.physical.outputs`)."""
         from ..simulation import simulate
+        from .outputs import OUTPUTS
+
+        def figures(**values) -> dict:
+            """The run's figures by output name, in the outputs' units, under their keys."""
+            return {OUTPUTS[k].shown_key: OUTPUTS[k].shown(x) for k, x in values.items()}
 
         dur, L, om, start = _rigid_start(self, duration_s, start_gap_m, start_velocity_m_s)
         tr = simulate(self.model(), self.drive(), start, dur * om)
@@ -269,8 +275,8 @@ class Drifter(_ScaledDrifter):
         n = int(late.sum())
         f = (n - 1) / float(t[late][-1] - t[late][0]) if n > 1 else math.nan
         e = 0.5 * self.bar.mass_kg * float((v * v).mean()) if n else math.nan
-        out = {"blows": n, "blow_frequency_Hz": f, "impact_velocity_m_s": float(v.mean()) if n else math.nan,
-               "impact_energy_J": e, "percussive_power_kW": e * f / 1e3}
+        out = {"blows": n, **figures(blow_frequency=f, impact_velocity=float(v.mean()) if n else math.nan,
+                                     impact_energy=e, percussive_power=e * f / 1e3)}
         pieces = tr.pieces if self.drill is not None else ()
         recs = [r for i in range(len(pieces)) for r in getattr(pieces[i], "impacts", ())]
         if recs and len(recs) == late.size:  # with a drill string: the blows' records, one per impact
@@ -282,9 +288,9 @@ class Drifter(_ScaledDrifter):
             def mean(x):
                 return float(np.mean(x)) if x else math.nan
 
-            out.update(work_on_rock_J=mean(work), penetration_mm=1e3 * mean(pen),
-                       efficiency=mean([float(r.efficiency) for r in late_recs]),
-                       drilling_rate_m_min=mean(pen) * f * 60.0)
+            out.update(figures(work_on_rock=mean(work), penetration=1e3 * mean(pen)))
+            out["efficiency"] = mean([float(r.efficiency) for r in late_recs])
+            out.update(figures(drilling_rate=mean(pen) * f * 60.0))
         return tr, out
 
     @classmethod

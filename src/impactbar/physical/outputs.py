@@ -33,6 +33,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .._shared.schema import Field
+from ..orbits.orbit import ORBIT_FIELDS
 from .display_units import display_unit
 
 __all__ = ["Output", "OUTPUTS", "register_output", "unregister_output", "outputs", "added_outputs",
@@ -162,6 +164,52 @@ class Output:
             return value
         return value * factor if factor > 1.0 else value / round(1.0 / factor)
 
+    @classmethod
+    def from_field(cls, declared: Field, long_name: str, of: Callable, **kwargs) -> Output:
+        """The output of a quantity a result type declares already (a field of
+        :data:`~impactbar.orbits.orbit.ORBIT_FIELDS`): its name, unit, key and dtype read from the
+        field (its SI column where it has one), not written again.
+
+        Parameters
+        ----------
+        declared : Field
+            The declared field: the output's name is its name; its unit and key its SI column's
+            (:class:`~impactbar._shared.schema.SI`) where it has one, else its own units.
+        long_name : str
+            The output's long name (a design map's variable is labelled with it).
+        of : callable
+            ``of(reading)``, as :class:`Output`'s.
+        **kwargs
+            The other attributes of :class:`Output`.
+
+        Returns
+        -------
+        Output
+        """
+        si = declared.si
+        unit = declared.units if si is None else si.units
+        kwargs.setdefault("key", None if si is None else si.name)
+        return cls(declared.name, unit, long_name, of, dtype=declared.dtype, **kwargs)
+
+    def column(self, long_name: str | None = None, **presentation) -> Field:
+        """The output as a declared field of an SI result type (a column of
+        :data:`~impactbar.physical.results.PHYSICAL_ORBIT_FIELDS`): named by its :attr:`key`, in
+        :attr:`unit`, of its dtype; the name and unit are the registry's, not written again.
+
+        Parameters
+        ----------
+        long_name : str, optional
+            The column's long name; the output's by default.
+        **presentation
+            The other attributes of :class:`~impactbar._shared.schema.Field` (``views``, ``label``,
+            ``fmt``).
+
+        Returns
+        -------
+        Field
+        """
+        return Field(self.key, long_name or self.long_name, self.unit, self.dtype, **presentation)
+
     def applies(self, kind: str, rock: bool) -> bool:
         """Whether a machine of ``kind`` (with the rock or not) has it."""
         return kind in self.machines and (rock or not self.rock)
@@ -251,20 +299,23 @@ def _rock(key: str) -> Callable:
 
 _BOTH = frozenset(MACHINES)
 
-#: The outputs by name, in the order every view lists them.
+#: The outputs by name, in the order every view lists them. An output that is a field of the orbit
+#: (:data:`~impactbar.orbits.orbit.ORBIT_FIELDS`, or that field's SI column) reads its name and unit
+#: there (:meth:`Output.from_field`); the SI results read the others' here (:meth:`Output.column`).
 OUTPUTS: dict[str, Output] = {o.name: o for o in (
     Output("blow_frequency", "Hz", "blow frequency", lambda r: r.point.blow_frequency_Hz,
            views={"store", "summary", "figure", "record", "branch"}, machines=_BOTH),
     Output("period", "s", "period of the operating point", lambda r: r.point.period_s,
            views={"store", "summary"}, machines=_BOTH),
-    Output("impact_velocity", "m/s", "piston velocity at impact", lambda r: r.point.impact_velocity_m_s,
-           views={"store", "summary", "figure"}, machines=_BOTH),
+    Output.from_field(ORBIT_FIELDS["impact_velocity"], "piston velocity at impact",
+                      lambda r: r.point.impact_velocity_m_s, views={"store", "summary", "figure"},
+                      machines=_BOTH),
     Output("impact_energy", "J", "piston kinetic energy at impact", lambda r: r.point.impact_energy_J,
            blow=lambda b: b["impact_energy_J"], views={"store", "summary", "figure", "record", "branch"},
            machines=_BOTH),
-    Output("max_abs_multiplier", "1", "largest modulus of the non-trivial Floquet multipliers",
-           lambda r: r.max_multiplier, views={"store", "figure"}, machines=_BOTH, key="max_multiplier",
-           optional=True),
+    Output.from_field(ORBIT_FIELDS["max_abs_multiplier"], "largest modulus of the non-trivial Floquet "
+                      "multipliers", lambda r: r.max_multiplier, views={"store", "figure"}, machines=_BOTH,
+                      key="max_multiplier", optional=True),
     Output("mean_supply_pressure", "Pa", "supply pressure averaged over the period (absolute)",
            lambda r: r.point.mean_supply_pressure_Pa, views={"store", "summary", "figure", "branch"}),
     Output("pump_power", "kW", "pump power Q_p (p_s - p_t) over the period", lambda r: r.point.pump_power_kW,
@@ -277,8 +328,8 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            objective="impact_power"),  # (the valve drifter's impact_power: the same product)
     Output("hydraulic_efficiency", "1", "energy the blows deliver over the pump's work",
            lambda r: r.point.hydraulic_efficiency, views={"store", "summary", "figure", "record", "branch"}),
-    Output("stable", "", "every non-trivial multiplier inside the unit circle", lambda r: r.point.stable,
-           views={"store", "summary"}, machines=_BOTH, dtype="b1", edge=True),
+    Output.from_field(ORBIT_FIELDS["stable"], "every non-trivial multiplier inside the unit circle",
+                      lambda r: r.point.stable, views={"store", "summary"}, machines=_BOTH, edge=True),
     *(Output(f"min_{v}_pressure", "Pa", f"least {what} pressure over the period (absolute)",
              _least(v), views={"store"})
       for v, what in (("rear", "rear chamber"), ("front", "front chamber"), ("supply", "supply"))),
@@ -287,8 +338,8 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
     Output("cavitates", "", "an absolute pressure falls below 0 during the period",
            lambda r: bool(min(r.least.values()) < 0.0) if r.least else False, views={"store", "summary"},
            dtype="b1", edge=True),
-    Output("admissibility", "", "whether the orbit is admissible, or why not",
-           lambda r: str(r.point.orbit.admissibility), views={"summary"}, machines={"drifter"}, dtype="U"),
+    Output.from_field(ORBIT_FIELDS["admissibility"], "whether the orbit is admissible, or why not",
+                      lambda r: str(r.point.orbit.admissibility), views={"summary"}, machines={"drifter"}),
     Output("multiplier", "1", "modulus of the first non-trivial Floquet multiplier",
            lambda r: abs(complex(r.point.multipliers[0])) if r.point.multipliers.size else 0.0,
            views={"summary"}, machines=_BOTH),

@@ -18,7 +18,9 @@ from ..orbits.orbit import ORBIT_FIELDS
 from ..simulation import InitialState
 from ..simulation import simulate as run_simulation
 from .bar import TWO_PI
+from .display_units import display_unit
 from .hammer import Hammer
+from .outputs import OUTPUTS
 
 
 # --------------------------------------------------------------------------------------------
@@ -44,28 +46,38 @@ def _orbit_si_fields() -> tuple[Schema, dict]:
 
 _ORBIT_SI, _CONVERT = _orbit_si_fields()
 
+
+def _shown(declared: Field, label: str) -> Field:
+    """``declared`` in the CLI's table in its display unit (a stress in Pa as MPa,
+    :func:`~impactbar.physical.display_units.display_unit`): headed ``label/<display unit>``, its value
+    divided by the scale."""
+    factor, unit = display_unit(declared.units)
+    return dataclasses.replace(declared, label=f"{label}/{unit}", scale=float(round(1.0 / factor)))
+
+
 #: The declared fields of :class:`PhysicalOrbit`: the orbit's in SI (generated from
-#: :data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the hammer's figures per blow
+#: :data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the hammer's figures per blow; a figure that is
+#: an output of a drifter (:data:`impactbar.physical.outputs.OUTPUTS`) takes its name and unit from it
+#: (:meth:`~impactbar.physical.outputs.Output.column`), its long name, label and format its own
 PHYSICAL_ORBIT_FIELDS = _ORBIT_SI + Schema(
     Field("blow_energy_J", "energy per blow m v^2 / 2", "J", views={"dict", "table", "cli"},
           label="E/J", fmt=".2f"),
-    Field("blow_frequency_Hz", "blows per second", "Hz", views={"dict", "table"}),
+    OUTPUTS["blow_frequency"].column("blows per second", views={"dict", "table"}),
     Field("power_W", "impact power", "W", views={"dict", "table", "cli"}, label="P/W", fmt=".1f"),
-    Field("peak_stress_Pa", "peak compressive stress at impact", "Pa", views={"dict", "table", "cli"},
-          label="sigma/MPa", fmt=".1f", scale=1e6),
-    Field("rod_energy_J", "energy carried into the rod per blow (theory §4b)", "J",
-          views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
-    Field("peak_rod_stress_Pa", "peak compressive stress of the transmitted wave in the rod", "Pa",
-          views={"dict", "table", "cli"}, label="rod/MPa", fmt=".1f", scale=1e6),
+    _shown(Field("peak_stress_Pa", "peak compressive stress at impact", "Pa", views={"dict", "table", "cli"},
+                 fmt=".1f"), "sigma"),
+    OUTPUTS["rod_energy"].column("energy carried into the rod per blow (theory §4b)",
+                                 views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
+    _shown(Field("peak_rod_stress_Pa", "peak compressive stress of the transmitted wave in the rod", "Pa",
+                 views={"dict", "table", "cli"}, fmt=".1f"), "rod"),
     Field("efficiency", "rod energy over the energy available to the blow", views={
           "dict", "table", "cli", "cli_rock"}, label="eff.", fmt=".3f"),
     Field("rod_advance_m", "advance of the rod end per blow", "m", views={"dict", "table"}),
-    Field("work_on_rock_J", "work on rock per blow (theory §4d)", "J", views={"dict", "cli_rock"},
-          label="rock/J", fmt=".2f"),
-    Field("penetration_mm", "permanent penetration per blow", "mm", views={"dict", "cli_rock"},
-          label="pen./mm", fmt=".4f"),
-    Field("drilling_rate_m_min", "penetration times the blow frequency", "m/min",
-          views={"dict", "cli_rock"}, label="rate m/min", fmt=".4f"),
+    OUTPUTS["work_on_rock"].column("work on rock per blow (theory §4d)", views={"dict", "cli_rock"},
+                                   label="rock/J", fmt=".2f"),
+    OUTPUTS["penetration"].column(views={"dict", "cli_rock"}, label="pen./mm", fmt=".4f"),
+    OUTPUTS["drilling_rate"].column("penetration times the blow frequency", views={"dict", "cli_rock"},
+                                    label="rate m/min", fmt=".4f"),
     Field("efficiency_with_rebound", "work on rock over the available energy less the rebound's",
           views={"dict", "cli_rock"}, label="eff.+reb.", fmt=".3f"),
 )

@@ -49,6 +49,7 @@ import numpy as np
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
 from ..physical.design_keys import INTEGER_KEYS
+from ..physical.outputs import OUTPUTS, Output, outputs
 from .grid import ChunkedGrid
 
 DRIFTER_TASKS = ("operating_point", "settle")
@@ -69,19 +70,33 @@ REASON_CHARS = 200
 #: the status codes of a point
 STATUS = {0: "orbit found", 1: "no orbit (ValueError)", 2: "failed (another error)"}
 
-#: the variables of the ``settle`` task (before its status and failure)
+
+def _cf_output_unit(unit: str) -> str:
+    """An output's SI unit as a CF ``units`` string (a flag's ``""`` stays)."""
+    return unit.replace("**", "").replace(" ", "")
+
+
+def _stored(output: Output, long_name: str | None = None, suffix: str = "") -> Field:
+    """An output (:mod:`impactbar.physical.outputs`) as a map's stored variable: its name (then
+    ``suffix``), long name (or ``long_name``), SI units and dtype, as the registry declares them."""
+    return Field(output.name + suffix, long_name or output.long_name, _cf_output_unit(output.si_unit),
+                 dtype=output.dtype)
+
+
+_VELOCITY, _FREQUENCY = OUTPUTS["impact_velocity"], OUTPUTS["blow_frequency"]
+#: the variables of the ``settle`` task (before its status and failure): the settled blows' impact
+#: velocity and frequency are the outputs', averaged over the blows
 _SETTLE = (
     Field("period_blows", "period of the settled motion in blows (0: not settled)", "", dtype="i2"),
     Field("settled", "the blows repeat a cycle (period_blows > 0)", "", dtype="b1"),
     Field("chatter_per_blow", "chatter impacts per blow over the last period (settled) or the second "
                               "half's blows (not settled)", "1"),
-    Field("impact_velocity", "mean piston velocity at the blows of the last period (settled) or of the "
-                             "second half (not settled)", "m/s"),
-    Field("impact_velocity_spread", "standard deviation of those blows' impact velocities", "m/s"),
-    Field("blow_frequency", "blows per unit time over the last period (settled) or between the second "
-                            "half's blows (not settled)", "Hz"),
-    Field("blow_frequency_spread", "standard deviation of the inverse intervals between those blows",
-          "Hz"),
+    _stored(_VELOCITY, "mean piston velocity at the blows of the last period (settled) or of the second "
+                       "half (not settled)"),
+    _stored(_VELOCITY, "standard deviation of those blows' impact velocities", "_spread"),
+    _stored(_FREQUENCY, "blows per unit time over the last period (settled) or between the second half's "
+                        "blows (not settled)"),
+    _stored(_FREQUENCY, "standard deviation of the inverse intervals between those blows", "_spread"),
     Field("n_blows", "blows of the run (impacts at least blow_fraction of the hardest)", "", dtype="i4"),
     Field("n_impacts", "impacts of the run, blows and chatter", "", dtype="i4"),
     Field("simulated_time", "time simulated from rest, to the last blow counted", "s"),
@@ -130,12 +145,9 @@ def map_variables(kind: str, rock: bool, task: str = "operating_point") -> Schem
     >>> map_variables("circuit", False, "settle").names[:3]
     ('period_blows', 'settled', 'chatter_per_blow')
     """
-    from ..physical.outputs import outputs
-
     if task == "settle":
         return Schema(*_SETTLE, *_SETTLE_TAIL)
-    return Schema(*(Field(o.name, o.long_name, _cf_output_unit(o.si_unit), dtype=o.dtype)
-                    for o in outputs("store", kind, rock)), *_TAIL)
+    return Schema(*(_stored(o) for o in outputs("store", kind, rock)), *_TAIL)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -319,11 +331,6 @@ def settle_options(table) -> dict:
 def _cf_unit(unit: str) -> str:
     """A pint unit as a CF ``units`` string (``"m**3/s"`` -> ``"m3/s"``; dimensionless ``"1"``)."""
     return "1" if unit == "" else unit.replace("**", "").replace(" ", "")
-
-
-def _cf_output_unit(unit: str) -> str:
-    """An output's SI unit as a CF ``units`` string (a flag's ``""`` stays)."""
-    return unit.replace("**", "").replace(" ", "")
 
 
 def is_map_spec(doc) -> bool:
