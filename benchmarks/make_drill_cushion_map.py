@@ -31,11 +31,11 @@ OUTPUTS = ("status", "blow_frequency", "impact_energy", "hydraulic_efficiency", 
 
 
 def spec(config=CONFIG, axes=None):
-    """The map's spec (:class:`impactbar.sweeps.DrifterMapSpec`) over ``axes`` (:data:`AXES`) of
+    """The map's spec (:class:`impactbar.sweeps.SweepSpec`) over ``axes`` (:data:`AXES`) of
     ``config``."""
-    from impactbar.sweeps.map_spec import parse_map_spec
+    from impactbar.sweeps import parse_spec
 
-    return parse_map_spec({"task": "operating_point", "config": str(config), "axes": axes or AXES})
+    return parse_spec({"task": "operating_point", "config": str(config), "axes": axes or AXES})
 
 
 def main(workers: int = 2, store=None, config=CONFIG, axes=None, out=OUT) -> None:

@@ -197,7 +197,7 @@ nitpick_ignore_regex = [
     ("py:.*", r"(numpy|scipy|pandas|xarray|pint|dask|distributed|zarr|matplotlib|dataclasses|"
               r"enum|collections|concurrent)(\..*)?"),
     ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|one_impact|multi_impact|find|phase|stability)|"
-              r"laws\.(base|abilities|registry|paper|wave|rodrock)|_shared|sweeps\.(spec|run|store|tasks|grid|map_spec|map_task|maps)|"
+              r"laws\.(base|abilities|registry|paper|wave|rodrock)|_shared|sweeps\.(spec|bar_spec|run|store|tasks|grid|map_spec|map_task|maps)|"
               r"continuation\.(engine|core))(\..*)?"),
 ]
 # Short names in the first line of a docstring, which the API tables show outside their class or

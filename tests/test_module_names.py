@@ -68,7 +68,8 @@ def test_renamed_public_names_resolve_to_the_new_ones_with_a_warning():
     from impactbar._shared.renamed import RENAMED
 
     homes = {"SwitchedOrbit": ("impactbar", "impactbar.orbits"), "find_switched_orbit": ("impactbar.orbits",),
-             "SwitchedTrajectory": ("impactbar", "impactbar.simulation")}
+             "SwitchedTrajectory": ("impactbar", "impactbar.simulation"),
+             "DrifterMapSpec": ("impactbar.sweeps",), "parse_map_spec": ("impactbar.sweeps",)}
     assert set(homes) == set(RENAMED)
     for old, packages in homes.items():
         for package in packages:

@@ -373,7 +373,7 @@ WIDER_NOT_RECORDS = {
     # _segments: the last segment; q: the modal coordinates: [0] the rigid mode; v: the modal velocities
     # ([0] the rigid mode) or a series' last
     "simulation/trajectory.py": {"_segments", "q", "v"},
-    "sweeps/spec.py": {"c"},  # c: a coefficient array's entries
+    "sweeps/bar_spec.py": {"c"},  # c: a coefficient array's entries
     "sweeps/tasks.py": {"contacts"},  # contacts: the first contact
 }
 #: module -> the tuples of named values, read by number, that the wider scan met (as

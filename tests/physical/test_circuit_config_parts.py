@@ -140,12 +140,12 @@ def test_the_sensitivities_take_a_part_s_key(example):
 
 
 def test_a_design_map_sweeps_a_part_s_key():
-    from impactbar.sweeps.map_spec import parse_map_spec
+    from impactbar.sweeps import parse_spec
     from impactbar.sweeps.map_task import compute_map_chunk, point_values
 
     cfg = read_config(EXAMPLE)[0]
     values = ["0.3 L", "0.9 L"]
-    spec = parse_map_spec({"task": "operating_point", "config": cfg, "chain": "default",
+    spec = parse_spec({"task": "operating_point", "config": cfg, "chain": "default",
                            "axes": {"parts.return_line.gas_volume": {"values": values}}})
     assert spec.axes[0].unit == "m**3" and spec.axes[0].values == pytest.approx((3e-4, 9e-4), rel=1e-15)
     got = {}

@@ -18,7 +18,7 @@ from impactbar.physical import build, optimize_drifter, read_config, with_values
 from impactbar.physical.config import config_kind, read_toml
 from impactbar.physical.design_keys import INTEGER_KEYS
 from impactbar.physical.loader import config_keys, config_value
-from impactbar.sweeps.map_spec import parse_map_spec
+from impactbar.sweeps import parse_spec
 
 pytest.importorskip("pint")
 
@@ -84,7 +84,7 @@ def _spec(path) -> bool:
 
 
 def _swept_examples() -> list[str]:
-    """The example machines a design map (``impactbar sweep``, :func:`parse_map_spec`) takes an axis
+    """The example machines a design map (``impactbar sweep``, :func:`parse_spec`) takes an axis
     of: the first of their keys it takes, or its refusal of the machine."""
     names = []
     for path in sorted((ROOT / "examples").glob("*.toml")):
@@ -108,7 +108,7 @@ def _map_takes(path, key: str, bounds) -> bool | None:
     """Whether a design map takes an axis over ``key`` at ``bounds``; ``None`` where it refuses the
     machine."""
     try:
-        parse_map_spec({"task": "operating_point", "config": str(path),
+        parse_spec({"task": "operating_point", "config": str(path),
                         "axes": {key: {"values": list(bounds)}}})
     except ValueError as exc:
         return None if "config must describe a drifter" in str(exc) else False

@@ -122,7 +122,7 @@ def test_the_tree_names_the_parameters_the_parts_declare():
     from impactbar import BarModel, BilinearRock, RodRock, RodSegment
     from impactbar.drives.circuit.drive import _RANGES, PARAMETERS, HydraulicCircuitDrive
     from impactbar.drives.circuit.parameters import DECLARED
-    from impactbar.sweeps.spec import MODEL_FIELDS, ROCK_KEYS
+    from impactbar.sweeps.bar_spec import MODEL_FIELDS, ROCK_KEYS
 
     held = {"drive": {p.name for p in DECLARED}, "law": set(RodRock.parameters),
             "model": set(BarModel.parameters.names)}

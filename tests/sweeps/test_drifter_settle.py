@@ -97,7 +97,7 @@ def test_period_one_points_blow_at_the_operating_points_frequency(settled):
 def test_a_settle_store_has_si_units_and_its_options(tmp_path):
     spec = parse_spec({"task": "settle", "config": "circuit-drifter", "settle": {"blows": 12},
                        "axes": {"supply.pump_flow": {"values": ["90 L/min", "120 L/min"]}}})
-    assert spec.settle == {**SETTLE_DEFAULTS, "blows": 12}
+    assert spec.options == {"refine_edges": False, "chain": "continue", **SETTLE_DEFAULTS, "blows": 12}
     assert parse_spec(json.loads(spec.to_json())) == spec
     run_map(spec, tmp_path / "s.zarr", executor="threads", n_workers=1, progress=False)
     ds = open_sweep(tmp_path / "s.zarr")
@@ -120,7 +120,7 @@ def test_a_settle_store_has_si_units_and_its_options(tmp_path):
 def test_the_defaults_are_the_librarys_and_an_operating_point_spec_is_unchanged():
     assert SETTLE_DEFAULTS["blow_fraction"] == BLOW_FRACTION
     assert SETTLE_DEFAULTS["settle_tolerance"] == SETTLE_TOLERANCE
-    assert parse_spec(_doc(settle=None)).settle["blows"] == 40
+    assert parse_spec(_doc(settle=None)).options["blows"] == 40
     assert "settle" not in parse_spec(_doc("operating_point")).to_dict()
 
 
@@ -130,7 +130,7 @@ def test_the_defaults_are_the_librarys_and_an_operating_point_spec_is_unchanged(
     ({"settle": {"blows": "40"}}, "[settle] blows"),
     ({"settle": {"blow_fraction": 0.0}}, "[settle] blow_fraction"),
     ({"settle": {"settle_tolerance": 1.0}}, "[settle] settle_tolerance"),
-    ({"settle": {"blow": 40}}, "[settle] option(s) ['blow']"),
+    ({"settle": {"blow": 40}}, "[settle] unknown key(s) ['blow']"),
     ({"settle": [40]}, "[settle] must be a table"),
     ({"task": "operating_point", "settle": {"blows": 40}}, "[settle]"),
 ])

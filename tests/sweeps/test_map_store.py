@@ -132,12 +132,12 @@ def test_a_dimensionless_grid_too_large_builds_no_point(monkeypatch):
     """The point count is asked before each axis value is checked by building its point: a mistyped
     size of 19,303 values along one of three axes took 10 s of CPU (21,008 points built), hours
     at worse sizes, before its refusal."""
-    from impactbar.sweeps import spec as sweep_spec
+    from impactbar.sweeps import bar_spec
 
     def built(*args, **kwargs):
         raise AssertionError("a point was built for an axis value of a grid refused for its size")
 
-    monkeypatch.setattr(sweep_spec, "_build", built)
+    monkeypatch.setattr(bar_spec, "_build", built)
     with pytest.raises(ValueError, match=r"^\[axes\] R \(1696\) x s \(9\) x d \(19303\) make 294640992 grid "
                                          rf"points; the limit is {MAX_GRID_POINTS}"):
         parse_spec({"task": "orbits", "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},

@@ -503,7 +503,6 @@ def test_store_created_with_zarr_alone_equals_xarrays(tmp_path, monkeypatch, doc
     equals, file for file and byte for byte, the one xarray's to_zarr writes from the template."""
     from impactbar.dynamics.implementations import implementation
     from impactbar.sweeps import store
-    from impactbar.sweeps.tasks import _variables
 
     spec = parse_spec(doc)
     files = {}
@@ -524,7 +523,7 @@ def test_store_created_with_zarr_alone_equals_xarrays(tmp_path, monkeypatch, doc
         # booleans as int8 and give every array a 0.0 fill value: unwritten chunks read as 0, not NaN)
         assert files[True] == files[False]
     # the root, every variable, the flags and checksums, the axes (and montecarlo's motion classes)
-    n_json = 1 + len(_variables(spec)) + 2 + len(spec.axes) + (spec.task == "montecarlo")
+    n_json = 1 + len(spec.variables()) + 2 + len(spec.axes) + (spec.task == "montecarlo")
     assert sum(p.name == "zarr.json" for p in files[False]) == n_json
 
 

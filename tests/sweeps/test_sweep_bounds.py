@@ -6,7 +6,8 @@ import time
 import pytest
 
 from impactbar.cli import main
-from impactbar.sweeps.spec import MAX_CHUNK_VALUES, parse_spec
+from impactbar.sweeps.bar_spec import MAX_CHUNK_VALUES
+from impactbar.sweeps.spec import parse_spec
 
 
 def _doc(task="orbits", chunk_points=None, **opts):

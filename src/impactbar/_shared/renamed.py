@@ -11,6 +11,9 @@ RENAMED = {
     "SwitchedOrbit": "DrivenOrbit",
     "find_switched_orbit": "find_driven_orbit",
     "SwitchedTrajectory": "DrivenTrajectory",
+    # one sweep spec class for the dimensionless bar and a drifter's design map
+    "DrifterMapSpec": "SweepSpec",
+    "parse_map_spec": "parse_spec",
 }
 
 

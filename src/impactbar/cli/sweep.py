@@ -78,18 +78,13 @@ def run(args) -> int:
             if res.computed and res.seconds > 0 else "")
     print(f"{args.out}: {res.already_done + res.computed}/{res.n_chunks} chunks stored "
           f"({res.already_done} found, {res.computed} computed in {res.seconds:.1f} s{rate})")
-    from ..sweeps import DrifterMapSpec
+    from ..sweeps.maps import sweep_edges
 
-    if isinstance(spec, DrifterMapSpec) and res.complete:  # a design map: its edges, refined on request
-        from ..physical.display_units import format_key
-        from ..sweeps import map_edges
-
-        edges = map_edges(args.out, refine=spec.refine_edges)
-        axes = {a.name: a for a in spec.axes}
-        for e in edges:  # in the unit the config writes the key in (the store keeps SI)
-            low, high, value = (format_key(e[k], axes[e["axis"]].unit, spec.config, e["axis"], digits)
-                                for k, digits in (("low", 6), ("high", 6), ("value", 7)))
-            where = f", refined to {value}" if e["value"] == e["value"] else ""
-            print(f"edge: {e['flag']} changes along {e['axis']} between {low} and {high}{where} "
-                  f"(at grid index {list(e['index'])})")
+    edges = sweep_edges(spec, args.out) if res.complete else []  # a design map's, refined on request
+    for e in edges:  # in the unit the config writes the key in (the store keeps SI)
+        low, high, value = (spec.axis_text(e["axis"], e[k], digits)
+                            for k, digits in (("low", 6), ("high", 6), ("value", 7)))
+        where = f", refined to {value}" if e["value"] == e["value"] else ""
+        print(f"edge: {e['flag']} changes along {e['axis']} between {low} and {high}{where} "
+              f"(at grid index {list(e['index'])})")
     return 0

@@ -1,13 +1,13 @@
 """Parameter sweeps and Monte Carlo on ``dask.distributed``, stored chunk by chunk in zarr.
 
-A sweep is described by a :class:`SweepSpec` (usually read from a TOML file with
-:func:`load_spec`): a task, a base bar and load, and axes, each sweeping one scalar field of the
-bar or the load. The grid is the outer product of the axes, cut into blocks of neighbouring points
-("chunks"); :func:`compute_chunk` computes one chunk from plain arguments (no dask, no storage) and
-:func:`run_sweep` farms the chunks out to a ``dask.distributed`` cluster and writes each one into a
-zarr store as soon as it arrives. A sweep whose every point takes the rigid bar's vectorised closed
-forms (:func:`impactbar.sweeps.spec.closed_form_task`) is computed in threads of the driver instead,
-by default: starting a cluster would cost more than the whole work.
+A sweep is described by a :class:`SweepSpec` (usually read from a TOML file with :func:`load_spec`):
+a task, a machine (the dimensionless bar and its load, or a drifter's config in SI) and axes, each
+sweeping one scalar parameter of it. The grid is the outer product of the axes, cut into blocks of
+neighbouring points ("chunks"); :func:`compute_chunk` computes one chunk from plain arguments (no
+dask, no storage) and :func:`run_sweep` farms the chunks out to a ``dask.distributed`` cluster and
+writes each one into a zarr store as soon as it arrives. A sweep whose every point takes the rigid
+bar's vectorised closed forms (:func:`impactbar.sweeps.spec.closed_form_task`) is computed in
+threads of the driver instead, by default: starting a cluster would cost more than the whole work.
 
 Tasks
 -----
@@ -40,12 +40,13 @@ never from the chunk order or the worker, so a resumed sweep equals an uninterru
 
 Design maps of a drifter
 ------------------------
-A spec with a top-level ``config`` (a drifter's TOML file or preset) is a design map over 1 to 3 of its
-SI config keys (:mod:`impactbar.sweeps.map_spec`), task ``operating_point``: the operating point at
-every point, each continued from its neighbour, stored in SI through the same store and driver;
-:func:`run_map` then records the edges (:func:`map_edges`).
+The same :class:`SweepSpec` with a top-level ``config`` (a drifter's TOML file or preset) is a design
+map over 1 to 3 of its SI config keys (:mod:`impactbar.sweeps.map_spec`), task ``operating_point``
+(or ``settle``): the operating point at every point, each continued from its neighbour, stored in SI
+through the same store and driver; :func:`run_map` then records the edges (:func:`map_edges`).
 
-Layout: ``spec`` (schema and validation), ``tasks`` (one chunk's work), ``store`` (zarr layout, done
+Layout: ``spec`` (the one spec class, its TOML schema), ``bar_spec`` (the dimensionless bar's
+tables), ``map_spec`` (a drifter's config keys), ``tasks`` (one chunk's work), ``store`` (zarr layout, done
 flags), ``run`` (the driver: dask, or threads), ``numba_cache`` (the workers' shared numba cache),
 ``plot`` (figures from a finished store; the only module that imports matplotlib). This layer sits
 on the core and imports dask, xarray and zarr lazily; the core never imports it.
@@ -53,8 +54,11 @@ on the core and imports dask, xarray and zarr lazily; the core never imports it.
 
 from __future__ import annotations
 
-from .map_spec import DrifterMapSpec as DrifterMapSpec
-from .map_spec import parse_map_spec as parse_map_spec
+import sys
+
+from .._shared.renamed import renamed
+from .grid import TASKS as TASKS
+from .grid import Axis as Axis
 from .maps import map_edges as map_edges
 from .maps import run_map as run_map
 from .numba_cache import numba_cache_plugin as numba_cache_plugin
@@ -64,8 +68,6 @@ from .run import NoWorkersError as NoWorkersError
 from .run import SweepRun as SweepRun
 from .run import run_sweep as run_sweep
 from .spec import LOAD_KINDS as LOAD_KINDS
-from .spec import TASKS as TASKS
-from .spec import Axis as Axis
 from .spec import SweepSpec as SweepSpec
 from .spec import load_spec as load_spec
 from .spec import motion_classes as motion_classes
@@ -97,8 +99,12 @@ __all__ = [
     "stored_spec",
     "sweep_progress",
     "plot_sweep",
-    "DrifterMapSpec",
-    "parse_map_spec",
     "run_map",
     "map_edges",
 ]
+
+
+def __getattr__(name: str):
+    if (value := renamed(sys.modules[__name__], name)) is not None:
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -5,13 +5,21 @@ task ``settle``, the motion from rest at each point, classified
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
+from ..physical.config import config_kind
 from ..physical.drifter import operating_point
 from ..physical.outputs import outputs as _outputs
 from ..physical.settle import settle_point
-from .map_spec import REASON_CHARS, DrifterMapSpec, _one_line
+from .tasks import _blank_chunk
 
+if TYPE_CHECKING:
+    from .spec import SweepSpec
+
+#: longest failure message kept per point (characters)
+REASON_CHARS = 200
 #: largest relative change of the period or the impact velocity from the neighbour a continued
 #: orbit may show; beyond it the point is found again by the default chain (another branch)
 JUMP = 0.25
@@ -70,33 +78,33 @@ def _landed_elsewhere(point, prev) -> bool:
     return False
 
 
-def compute_map_chunk(spec: DrifterMapSpec, chunk: int) -> dict:
+def compute_map_chunk(spec: SweepSpec, chunk: int) -> dict:
     """One work chunk of a drifter map (what :func:`impactbar.sweeps.compute_chunk` runs for one).
 
     Parameters
     ----------
-    spec : DrifterMapSpec
+    spec : SweepSpec
     chunk : int
         ``0 <= chunk < spec.n_chunks``.
 
     Returns
     -------
     dict of str to numpy.ndarray
-        Every variable of :meth:`DrifterMapSpec.variables`, each of the chunk's block's shape.
+        Every variable of :meth:`SweepSpec.variables`, each of the chunk's block's shape.
     """
     from .._shared.threads import single_threaded_blas
 
     if spec.task == "settle":
         return _settle_chunk(spec, chunk)
-    slices, block, out = _blank_block(spec, chunk)
-    prev, prev_local = None, None
+    slices, block, out = _blank_chunk(spec, chunk)
+    prev, prev_local, kind = None, None, config_kind(spec.config)
     with single_threaded_blas():
         for local in _snake(block):
             index = tuple(s.start + i for s, i in zip(slices, local, strict=True))
             point, origin, reason, status = None, 0, "", 0
             try:
-                machine = spec.machine(index)
-                if prev is not None and spec.chain == "continue":
+                machine = spec.point(index)
+                if prev is not None and spec.options["chain"] == "continue":
                     try:
                         point = operating_point(machine, prev)
                         origin = _origin(prev_local, local)
@@ -106,7 +114,7 @@ def compute_map_chunk(spec: DrifterMapSpec, chunk: int) -> dict:
                         point = None
                 if point is None:
                     point = operating_point(machine)
-                values = point_values(point, spec.kind, spec.rock)
+                values = point_values(point, kind, "rock" in spec.config)
             except Exception as exc:  # noqa: BLE001 - one point's failure is kept, the map goes on
                 point, (status, reason) = None, _failure(exc)
             if point is None:
@@ -121,11 +129,8 @@ def compute_map_chunk(spec: DrifterMapSpec, chunk: int) -> dict:
     return out
 
 
-def _blank_block(spec: DrifterMapSpec, chunk: int):
-    """A chunk's slices of the grid, its block's shape and its variables filled with their fills."""
-    slices = spec.block(chunk)
-    block = tuple(s.stop - s.start for s in slices)
-    return slices, block, {f.name: np.full(block, f.fill, dtype=f.dtype) for f in spec.variables()}
+def _one_line(exc) -> str:
+    return " ".join(str(exc).split())
 
 
 def _failure(exc: Exception) -> tuple:
@@ -172,12 +177,12 @@ def find_edges(ds, flags=EDGE_FLAGS) -> list:
     return out
 
 
-def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rtol: float = EDGE_RTOL):
+def refine_edge(spec: SweepSpec, axis: int, index: tuple, flag: str, *, rtol: float = EDGE_RTOL):
     """Locate an edge by bisection on the axis' parameter, the other keys at the point's values.
 
     Parameters
     ----------
-    spec : DrifterMapSpec
+    spec : SweepSpec
     axis : int
         The axis along which the flag changes.
     index : tuple of int
@@ -203,7 +208,7 @@ def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rto
     others = {x.name: x.values[i] for k, (x, i) in enumerate(zip(spec.axes, index, strict=True)) if k != axis}
 
     def at(value, guess=None):
-        machine = spec.machine(values={**others, ax.name: value})
+        machine = spec.point(values={**others, ax.name: value})
         point = None
         if guess is not None:
             try:
@@ -214,15 +219,13 @@ def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rto
                 point = None
         if point is None:
             point = operating_point(machine)
-        return point, bool(point_values(point, spec.kind, False)[flag])
+        return point, bool(point_values(point, config_kind(spec.config), False)[flag])
 
     pa, fa = at(a)
     _, fb = at(b, pa)
     if fa == fb:
-        from ..physical.display_units import format_key
-
-        raise ValueError(f"{flag} does not change between {format_key(a, ax.unit, spec.config, ax.name)} and "
-                         f"{format_key(b, ax.unit, spec.config, ax.name)} along {ax.name}")
+        raise ValueError(f"{flag} does not change between {spec.axis_text(ax.name, a)} and "
+                         f"{spec.axis_text(ax.name, b)} along {ax.name}")
     while abs(b - a) > rtol * max(abs(a), abs(b)):
         m = 0.5 * (a + b)
         pm, fm = at(m, pa)
@@ -236,17 +239,17 @@ def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rto
 # ------------------------------------------------------------------------------------------------
 # the settle task
 # ------------------------------------------------------------------------------------------------
-def _settle_chunk(spec: DrifterMapSpec, chunk: int) -> dict:
+def _settle_chunk(spec: SweepSpec, chunk: int) -> dict:
     """:func:`compute_map_chunk` of a ``settle`` map: :func:`settle_point` at each point."""
     from .._shared.threads import single_threaded_blas
 
-    slices, block, out = _blank_block(spec, chunk)
-    opts = spec.settle
+    slices, block, out = _blank_chunk(spec, chunk)
+    opts = spec.options
     with single_threaded_blas():
         for local in np.ndindex(*block):
             index = tuple(s.start + i for s, i in zip(slices, local, strict=True))
             try:
-                values = settle_point(spec.machine(index), opts["blows"], opts["blow_fraction"],
+                values = settle_point(spec.point(index), opts["blows"], opts["blow_fraction"],
                                       opts["settle_tolerance"])
             except Exception as exc:  # noqa: BLE001 - one point's failure is kept, the map goes on
                 status, reason = _failure(exc)

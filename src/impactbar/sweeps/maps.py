@@ -7,18 +7,18 @@ import warnings
 
 import numpy as np
 
-from .map_spec import DrifterMapSpec
 from .map_task import EDGE_FLAGS, EDGE_RTOL, find_edges, refine_edge
 
 
 # ------------------------------------------------------------------------------------------------
-def run_map(spec: DrifterMapSpec, store, *, refine: bool | None = None, **kwargs):
-    """Compute a drifter map into a zarr store (:func:`impactbar.sweeps.run_sweep`: chunks stored as
-    they finish, a rerun resumes), then its edges (:func:`map_edges`).
+def run_map(spec, store, *, refine: bool | None = None, **kwargs):
+    """Compute a sweep or a drifter map into a zarr store (:func:`impactbar.sweeps.run_sweep`: chunks
+    stored as they finish, a rerun resumes), then a map's edges (:func:`map_edges`; a sweep of the
+    dimensionless bar has none).
 
     Parameters
     ----------
-    spec : DrifterMapSpec
+    spec : SweepSpec
     store : path-like
         The zarr store (a folder).
     refine : bool, optional
@@ -35,8 +35,17 @@ def run_map(spec: DrifterMapSpec, store, *, refine: bool | None = None, **kwargs
 
     res = run_sweep(spec, store, **kwargs)
     if res.complete:
-        map_edges(store, refine=spec.refine_edges if refine is None else refine)
+        sweep_edges(spec, store, refine)
     return res
+
+
+def sweep_edges(spec, store, refine: bool | None = None) -> list:
+    """The edges (:func:`map_edges`'s list) of a complete ``store`` of ``spec`` where its machine
+    has them (a drifter's design map), refined as the spec's ``refine_edges`` says unless ``refine``
+    is given; none (and nothing written) for a sweep of the dimensionless bar."""
+    if not spec.space.edges:
+        return []
+    return map_edges(store, refine=spec.options["refine_edges"] if refine is None else refine)
 
 
 def map_edges(store, *, refine: bool = False) -> list:
@@ -66,7 +75,7 @@ def map_edges(store, *, refine: bool = False) -> list:
 
     ds = open_sweep(store)
     spec = stored_spec(ds)
-    if not isinstance(spec, DrifterMapSpec):
+    if not spec.space.edges:
         raise ValueError(f"{store} is not a drifter map (task {spec.task}); edges are a map's")
     done = np.asarray(ds["chunk_done"].values)
     if not np.all(done == 1):

@@ -52,18 +52,18 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     spec = stored_spec(ds)
     axes = [a.name for a in spec.axes]
     ds = ds.assign(point_done=point_done(ds))
-    units = {a.name: getattr(a, "unit", None) for a in spec.axes}  # a design map's: SI, pint's spelling
+    units = {a.name: a.unit for a in spec.axes}  # SI, pint's spelling ("" dimensionless)
     for name, value in (select or {}).items():
         if name not in axes:
             raise ValueError(f"--select {name}: not an axis of this sweep; axes: {axes}")
-        if isinstance(value, str) and units[name] is not None:
+        if isinstance(value, str):
             from ..physical.units import to_si
 
             value = to_si(f"--select {name}", value, units[name], repr(f"1 {units[name]}"),
                           what=f"in {units[name] or 'no unit'} as the axis")
         if not isinstance(value, int | float | np.integer | np.floating) or not np.isfinite(value):
-            hint = "" if units[name] is None else f" or a quantity in {units[name] or 'no unit'}"
-            raise ValueError(f"--select {name}: VALUE must be a finite number{hint}; got {value!r}")
+            raise ValueError(f"--select {name}: VALUE must be a finite number or a quantity in "
+                             f"{units[name] or 'no unit'}; got {value!r}")
         ds = ds.sel({name: value}, method="nearest")
     dims = tuple(a for a in axes if a in ds.dims and ds.sizes[a] > 1)
     ds = ds.squeeze([a for a in axes if a in ds.dims and ds.sizes[a] == 1], drop=False)
@@ -82,7 +82,7 @@ def held_axes(ds, spec, dims) -> str:
     ----------
     ds : xarray.Dataset
         A reduced sweep store (:func:`reduce_axes`): a fixed axis is a scalar coordinate.
-    spec : SweepSpec or DrifterMapSpec
+    spec : SweepSpec
         The sweep's spec (:func:`~impactbar.sweeps.store.stored_spec`): its axes, in spec order.
     dims : tuple of str
         The axes the chart shows.
@@ -91,21 +91,8 @@ def held_axes(ds, spec, dims) -> str:
     -------
     str
     """
-    config = getattr(spec, "config", None)  # a design map's: its keys' units as written
-    parts = []
-    for ax in spec.axes:
-        name = ax.name
-        if name in dims or name not in ds.coords or ds[name].ndim != 0:
-            continue
-        value = ds[name].values.item()
-        if config is not None:
-            from ..physical.display_units import format_key
-
-            parts.append(f"{name} = {format_key(value, ax.unit, config, name)}")
-            continue
-        units = ds[name].attrs.get("units", "")
-        units = "" if units in ("", "1") else f" {units}"
-        parts.append(f"{name} = {value:.6g}{units}")
+    parts = [f"{ax.name} = {spec.axis_text(ax.name, ds[ax.name].values.item())}" for ax in spec.axes
+             if ax.name not in dims and ax.name in ds.coords and ds[ax.name].ndim == 0]
     return "held at " + ", ".join(parts) if parts else ""
 
 

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from .._shared.validate import check_int, check_real
-from .map_spec import DrifterMapSpec
 from .numba_cache import cache_folder, use_numba_cache
 from .spec import SweepSpec, closed_form_task
 from .store import _checksum, _open_group, _prepare_store, _write_chunks, _write_done
@@ -156,8 +155,8 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
     >>> run.complete, run.computed  # the rigid closed forms: in threads of this process, no cluster
     (True, 1)
     """
-    if not isinstance(spec, SweepSpec | DrifterMapSpec):
-        raise ValueError(f"spec must be a SweepSpec or a DrifterMapSpec; got {type(spec).__name__}")
+    if not isinstance(spec, SweepSpec):
+        raise ValueError(f"spec must be a SweepSpec; got {type(spec).__name__}")
     if sum(x is not None for x in (client, scheduler, n_workers)) > 1:
         raise ValueError("give at most one of client, scheduler, n_workers")
     if n_workers is not None:

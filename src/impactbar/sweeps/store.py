@@ -14,29 +14,17 @@ import numpy as np
 
 from ..dynamics.implementations import use_fast
 from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
-from .tasks import _variables, chunk_slices
+from .tasks import chunk_slices
 
 # ------------------------------------------------------------------------------------------------
 # the store
 # ------------------------------------------------------------------------------------------------
 #: units of the stored variables and axes (CF convention: "1" for dimensionless numbers, eq. 2;
 #: flags, counts and names carry ""); a variable not listed is dimensionless
-UNITS = {  # (the variables' own are declared with them: impactbar.sweeps.tasks._variables)
+UNITS = {  # (the variables' own are declared with them: impactbar.sweeps.SweepSpec.variables)
     "motion": "",
     _DONE: "",
 }
-
-def _axis_name(spec: SweepSpec, name: str) -> str:
-    """The long name of a grid axis: its parameter's description (:meth:`SweepSpec.parameters`)."""
-    return spec.parameters()[name].description
-
-
-def _axis_attrs(spec, name: str) -> dict:
-    """``long_name`` and ``units`` of a grid axis (a drifter map's: its config key and SI unit)."""
-    if hasattr(spec, "axis_attrs"):
-        return spec.axis_attrs(name)
-    return {"long_name": _axis_name(spec, name), "units": UNITS.get(name, "1")}
-
 
 def _var_attrs(name: str, description: str, units: str | None = None) -> dict:
     """``long_name``, ``units`` and ``description`` of a stored variable."""
@@ -55,7 +43,7 @@ def _template(spec: SweepSpec):
     extra_dim = _EXTRA_DIM.get(spec.task)
     chunks = spec.chunk_shape
     data_vars = {}
-    for f in _variables(spec):
+    for f in spec.variables():
         extra = f.per is not None
         shape = spec.shape + ((spec.extra_size,) if extra else ())
         ch = chunks + ((spec.extra_size,) if extra else ())
@@ -69,7 +57,7 @@ def _template(spec: SweepSpec):
                                                       chunks=spec.n_chunks),
                                   attrs=_var_attrs(_SUM, "CRC-32 of the work chunk's data "
                                                          "(-1 before it is stored)"))
-    coords = {a.name: xr.Variable((a.name,), np.asarray(a.values), attrs=_axis_attrs(spec, a.name))
+    coords = {a.name: xr.Variable((a.name,), np.asarray(a.values), attrs=spec.axis_attrs(a.name))
               for a in spec.axes}
     if spec.task == "montecarlo":
         coords["motion"] = xr.Variable(("motion",), np.asarray(motion_classes(), dtype=object),
@@ -105,7 +93,7 @@ def _store_arrays(spec: SweepSpec) -> list:
     dims = tuple(a.name for a in spec.axes)
     extra_dim = _EXTRA_DIM.get(spec.task)
     arrays = []
-    for f in _variables(spec):
+    for f in spec.variables():
         extra, dtype = f.per is not None, np.dtype(f.dtype)
         tail = (spec.extra_size,) if extra else ()
         arrays.append((f.name, None, dtype, spec.shape + tail, spec.chunk_shape + tail, f.fill,
@@ -119,7 +107,7 @@ def _store_arrays(spec: SweepSpec) -> list:
         values = np.asarray(a.values)
         arrays.append((a.name, values, values.dtype, values.shape, values.shape,
                        np.nan if values.dtype.kind == "f" else 0, (a.name,),
-                       attrs(_axis_attrs(spec, a.name), values.dtype, np.nan)))
+                       attrs(spec.axis_attrs(a.name), values.dtype, np.nan)))
     if spec.task == "montecarlo":
         classes = np.asarray(motion_classes(), dtype=object)
         arrays.append(("motion", classes, str, classes.shape, classes.shape, "", ("motion",),
@@ -272,7 +260,7 @@ def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool):
 def _checksum(spec: SweepSpec, result: dict) -> int:
     """CRC-32 of a chunk's data, every variable cast to its stored dtype, in a fixed order."""
     crc = 0
-    for f in _variables(spec):
+    for f in spec.variables():
         crc = zlib.crc32(np.ascontiguousarray(result[f.name], dtype=f.dtype).tobytes(), crc)
     return crc
 
@@ -281,7 +269,7 @@ def _stored_checksum(spec: SweepSpec, group, chunk: int) -> int:
     """CRC-32 of what the store holds for a chunk (raises if a zarr chunk cannot be read)."""
     slices = chunk_slices(spec, chunk)
     data = {}
-    for f in _variables(spec):
+    for f in spec.variables():
         data[f.name] = group[f.name][slices + ((slice(None),) if f.per is not None else ())]
     return _checksum(spec, data)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,9 +14,9 @@ from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
 from ..dynamics.implementations import implementation
 from ..laws import get_law
-from .map_spec import DrifterMapSpec
-from .map_task import compute_map_chunk
-from .spec import SweepSpec, motion_classes
+
+if TYPE_CHECKING:
+    from .spec import SweepSpec
 
 #: a sweep in the rigid closed forms with fewer grid points than this takes the numpy closed forms
 #: (the reference of ``"orbits.rigid_arrays"``) rather than the compiled loop: importing numba and
@@ -36,6 +37,15 @@ def chunk_slices(spec: SweepSpec, chunk: int) -> tuple[slice, ...]:
     """
     return spec.block(check_int("chunk", chunk, lo=0, hi=spec.n_chunks - 1))
 
+
+
+def motion_classes() -> tuple[str, ...]:
+    """The ``motion`` coordinate of a ``montecarlo`` store: the classes of
+    :func:`impactbar.simulation.experiments.classify` in their report order, and ``"k>8"`` for any longer
+    one-impact cycle."""
+    from ..simulation.experiments import CLASS_ORDER
+
+    return (*CLASS_ORDER, "k>8")
 
 
 def point_seed(base_seed: int, flat_index: int) -> int:
@@ -72,13 +82,10 @@ _TASK_VARIABLES = {
 }
 
 
-def _variables(spec: SweepSpec) -> Schema:
-    """The task's variables, each a :class:`~impactbar._shared.schema.Field` (dtype, fill, long name,
-    units); ``per`` names the extra dimension of those along it. An ``orbits`` sweep stores the
-    orbit's fields in the view ``"sweep"`` (:data:`impactbar.orbits.orbit.ORBIT_FIELDS`) along
-    ``orbit``. A drifter map (:mod:`impactbar.sweeps.map_spec`) names its own."""
-    if isinstance(spec, DrifterMapSpec):
-        return spec.variables()
+def _bar_variables(spec: SweepSpec) -> Schema:
+    """The variables of a task of the dimensionless bar (:meth:`SweepSpec.variables`); an ``orbits``
+    sweep stores the orbit's fields in the view ``"sweep"`` (:data:`~impactbar.orbits.orbit.ORBIT_FIELDS`)
+    along ``orbit``."""
     if spec.task == "orbits":
         from ..orbits.orbit import ORBIT_FIELDS
 
@@ -110,17 +117,25 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
         A ``ValueError`` from the library at one point (e.g. an undamped resonance) only sets
         ``failed`` there.
     """
-    from .._shared.threads import single_threaded_blas
+    return spec.space.compute_chunk(spec, chunk)
 
-    if isinstance(spec, DrifterMapSpec):  # a drifter map: its own task
-        return compute_map_chunk(spec, chunk)
+
+def _blank_chunk(spec: SweepSpec, chunk: int) -> tuple:
+    """A work chunk's slices of the grid, its block's shape and every variable filled with its fill
+    (those along the task's extra dimension with it)."""
     slices = chunk_slices(spec, chunk)
     block = tuple(s.stop - s.start for s in slices)
-    out = {}
-    variables = _variables(spec)
-    for f in variables:
-        shape = block + ((spec.extra_size,) if f.per else ())
-        out[f.name] = np.full(shape, f.fill, dtype=f.dtype)
+    extra = (spec.extra_size,)
+    return slices, block, {f.name: np.full(block + (extra if f.per else ()), f.fill, dtype=f.dtype)
+                           for f in spec.variables()}
+
+
+def _bar_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
+    """One work chunk of a task of the dimensionless bar (:func:`compute_chunk`)."""
+    from .._shared.threads import single_threaded_blas
+
+    slices, block, out = _blank_chunk(spec, chunk)
+    variables = spec.variables()
     one = {"orbits": _orbits_point, "montecarlo": _montecarlo_point, "bifurcation": _bifurcation_point}
     todo = None
     if spec.task == "orbits":
@@ -204,7 +219,7 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     todo.extend(np.nonzero(~covered)[0].tolist())
     todo = [tuple(int(x) for x in np.unravel_index(p, block)) for p in sorted(todo)]
     for local in todo:  # reset what the point-by-point path will recompute
-        for f in _variables(spec):
+        for f in spec.variables():
             out[f.name][local] = f.fill
     return todo
 
