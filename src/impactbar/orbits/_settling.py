@@ -50,12 +50,13 @@ PERIOD_CONTRAST = 20.0
 def other_period(speeds, tol: float, most: int = OTHER_PERIODS) -> int:
     """The impacts per period of a motion whose impact velocities repeat every ``k > 1`` impacts but
     not every impact (a period-``k`` motion, a double blow, a blow with its chatter): 0 where there is
-    none (still settling, or one impact per period).
+    none (still settling, too few velocities, or one impact per period).
 
-    The smallest ``k`` from 2 to ``most`` for which the last ``2 k`` velocities each repeat the one
+    The smallest ``k`` from 2 to ``most`` (with at least ``4 k + 1`` velocities) for which the last
+    ``2 k`` velocities each repeat the one
     ``k`` impacts before to ``tol`` (relative, at least 1), the velocities within the last cycle
     differ from impact to impact :data:`PERIOD_CONTRAST` times more than that (and above ``tol``),
-    and that difference has shrunk since the cycle before by less than the velocities' change over a
+    and that difference has shrunk since the cycle before by no more than the velocities' change over a
     cycle (a decaying oscillation about a one-impact orbit shrinks by about twice that; a period-``k``
     motion's cycle drifts with the oil's supply pressure, its difference shrinking by some 5 % of that
     change). A design of the example rock drifter beside the optimiser's optimum
@@ -79,8 +80,8 @@ def other_period(speeds, tol: float, most: int = OTHER_PERIODS) -> int:
     Examples
     --------
     >>> from impactbar.orbits._settling import other_period
-    >>> other_period([0.5, 0.4, 0.5, 0.4, 0.5, 0.4], 1e-4), other_period([0.5, 0.5, 0.5, 0.5], 1e-4)
-    (2, 0)
+    >>> other_period([0.5, 0.4] * 5, 1e-4), other_period([0.5, 0.4] * 2, 1e-4), other_period([0.5] * 9, 1e-4)
+    (2, 0, 0)
     """
     s = np.asarray(speeds, dtype=float)
     for k in range(2, most + 1):
@@ -91,7 +92,7 @@ def other_period(speeds, tol: float, most: int = OTHER_PERIODS) -> int:
         step = np.abs(np.diff(s[-4 * k - 1:]))
         last, before = float(np.max(step[-k:])), float(np.max(step[-2 * k:-k]))
         contrast = last > max(PERIOD_CONTRAST * again, tol * scale)
-        if again <= tol * scale and contrast and before - last < again:
+        if again <= tol * scale and contrast and before - last <= again:
             return k
     return 0
 
