@@ -3,16 +3,19 @@ design with one, on this tree and on another, in the same session.
 
 The designs are the documented optimum of examples/circuit_drifter_rock_piston.toml
 (docs/optimising_a_drifter.md, the drilling rate held) with its collar's diameter times each of
-``--factors``: from about 1.0095 to 1.0125 lies a band without a one-impact orbit. Each is evaluated
-as the optimiser's workers evaluate a design (``_design_record``: the build, the operating point,
-and for a design without one its record, its motion from rest classified), one process, after one
-untimed design (numba's caches). Prints per tree the median and the largest CPU seconds of the designs with
+``--factors``: from about 1.0095 to 1.0125 lies a band without a one-impact orbit; and a design the
+optimiser's search met without one (``searched``: its motion followed from rest to Newton's start
+alternates, two impacts a period; ``--no-searched`` leaves it out). Each is evaluated as the
+optimiser's workers evaluate a design (``_design_record``: the build, the operating point, and for a
+design without one its record, its motion from rest classified), one process, after one untimed
+design (numba's caches). Prints per tree the median and the largest CPU seconds of the designs with
 and without an operating point, the failed ones' split (the orbit's attempt, the motion's
 classification) and whether the two trees' records (every figure but the seconds) agree to the bit.
 Nothing is asserted.
 
-Run: ``python benchmarks/bench_failed_evaluation.py [--against REF] [--rounds N] [--factors F1,F2,...]``
-(``REF`` a git ref or a tree's ``src`` folder; the least of ``--rounds`` fresh processes per design).
+Run: ``python benchmarks/bench_failed_evaluation.py [--against REF] [--rounds N] [--factors F1,F2,...]
+[--no-searched]`` (``REF`` a git ref or a tree's ``src`` folder; the least of ``--rounds`` fresh
+processes per design).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ import numpy as np
 from _timing import fresh_runs, ref_tree  # this folder's shared timer
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "physical"))
-from drifter_optimum import EXAMPLE, collar  # noqa: E402  (the tests': the documented optimum, its collar varied)
+from drifter_optimum import EXAMPLE, SEARCHED, collar  # noqa: E402  (the tests': the documented optimum, its collar varied)
 
 FACTORS = "1.0,1.003,1.009,1.01,1.0105,1.011,1.0115,1.012,1.013,1.03"
 
@@ -38,7 +41,12 @@ def _figures(rec: dict) -> str:
     return json.dumps(kept, sort_keys=True, default=repr)
 
 
-def _run(factors: list) -> dict:
+def _designs(factors: list, searched: bool) -> list:
+    """``(label, changes)`` of each design: the collars' factors, then the searched design."""
+    return [(f"collar x {f:g}", collar(f)) for f in factors] + ([("searched", SEARCHED)] if searched else [])
+
+
+def _run(factors: list, searched: bool = True) -> dict:
     """Each design's CPU seconds, whether it has an operating point, its motion's seconds, its record."""
     from impactbar.physical import read_config
     from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, _design_record
@@ -48,10 +56,10 @@ def _run(factors: list) -> dict:
 
     _design_record(collar(factors[0]), cfg, folder, limits)  # (numba's caches)
     out = []
-    for f in factors:
+    for label, changes in _designs(factors, searched):
         t = time.process_time()
-        rec = _design_record(collar(f), cfg, folder, limits)
-        out.append({"factor": f, "cpu_s": time.process_time() - t, "ok": rec["ok"],
+        rec = _design_record(changes, cfg, folder, limits)
+        out.append({"design": label, "cpu_s": time.process_time() - t, "ok": rec["ok"],
                     "motion_s": rec.get("motion_seconds", 0.0), "record": _figures(rec)})
     return {"designs": out}
 
@@ -75,28 +83,32 @@ def main(argv=None) -> int:
     parser.add_argument("--against", metavar="REF", help="the baseline's git ref or src folder")
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--factors", default=FACTORS)
+    parser.add_argument("--no-searched", action="store_true", help="without the searched design")
     parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
     args = parser.parse_args(argv)
     factors = [float(f) for f in args.factors.split(",")]
+    searched = not args.no_searched
     if args.json:
-        print(json.dumps(_run(factors)))
+        print(json.dumps(_run(factors, searched)))
         return 0
     if args.against is None:
-        designs = _run(factors)["designs"]
+        designs = _run(factors, searched)["designs"]
         for d in designs:
-            print(f"collar x {d['factor']:<6g} {'ok' if d['ok'] else 'no orbit':9s} {d['cpu_s']:7.2f} s CPU")
+            print(f"{d['design']:16s} {'ok' if d['ok'] else 'no orbit':9s} {d['cpu_s']:7.2f} s CPU")
         print(json.dumps(_summary(designs), indent=1))
         return 0
     src = args.against if Path(args.against).is_dir() else ref_tree(args.against)
-    runs = fresh_runs(__file__, src, args.rounds, ("--factors", args.factors))
+    labels = [label for label, _ in _designs(factors, searched)]
+    more = ("--factors", args.factors) + (() if searched else ("--no-searched",))
+    runs = fresh_runs(__file__, src, args.rounds, more)
     # per design the least CPU of the rounds
     best = {k: [min((r["designs"][i] for r in runs[k]), key=lambda d: d["cpu_s"])
-                for i in range(len(factors))] for k in runs}
-    print(f"{'collar x':10s} {'baseline':>18s} {'new':>18s}")
-    for i, f in enumerate(factors):
+                for i in range(len(labels))] for k in runs}
+    print(f"{'design':16s} {'baseline':>18s} {'new':>18s}")
+    for i, label in enumerate(labels):
         cells = [f"{'ok' if d['ok'] else 'none'} {d['cpu_s']:7.2f} s"
                  for d in (best["baseline"][i], best["new"][i])]
-        print(f"{f:<10g} {cells[0]:>18s} {cells[1]:>18s}")
+        print(f"{label:16s} {cells[0]:>18s} {cells[1]:>18s}")
     a, b = _summary(best["baseline"]), _summary(best["new"])
     for key in a:
         cells = [f"{v:18.3g}" if isinstance(v, float) else f"{'-' if v is None else v!s:>18s}"

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import inspect
 import json
 import sys
@@ -116,7 +117,9 @@ def summary(res, wall: float, cpu: float, calls: dict) -> dict:
             "certificate": cert.verdict if cert is not None else "none",
             "KKT residual": cert.residual if cert is not None else None,
             "gain %": 100.0 * res.gain, OBJECTIVES[res.objective][0]: res.optimum["objectives"][
-                OBJECTIVES[res.objective][0]]}
+                OBJECTIVES[res.objective][0]],
+            "optimum (its changes' digest)": hashlib.sha1(json.dumps(res.optimum["changes"], sort_keys=True)
+                                                          .encode()).hexdigest()[:12]}
 
 
 def against(ref: str, args: list) -> None:

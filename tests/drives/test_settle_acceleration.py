@@ -204,3 +204,34 @@ def test_the_spool_drills_start_carried_to_its_relief_finds_the_same_orbit_in_fe
     assert np.max(np.abs(X - Xs)) <= 1e-9 * np.max(np.abs(Xs))
     np.testing.assert_allclose(fast.multipliers, slow.multipliers, rtol=0, atol=1e-8)
     assert n_fast < 2 * count[0] / 3, (n_fast, count[0])
+
+
+def _period_speeds(cycle, n, drift=0.0, noise=0.0, seed=5):
+    """``n`` impact velocities repeating ``cycle``, each cycle's values moved by ``drift`` times the
+    one before's distance to its limit (a slow supply mode), with a relative noise."""
+    rng = np.random.default_rng(seed)
+    cycle = np.asarray(cycle, dtype=float)
+    out = np.array([cycle[i % cycle.size] * (1.0 - 0.01 * drift ** (i // cycle.size)) for i in range(n)])
+    return out * (1.0 + noise * rng.standard_normal(n))
+
+
+@pytest.mark.parametrize("cycle", [(0.46, 0.4625), (0.5, 0.44, 0.47), (0.5, 0.5, 0.42)])
+def test_other_period_finds_a_cycle_of_impacts_that_repeats(cycle):
+    """A cycle of ``k`` impacts repeating to 1e-7 (the loose flights' noise), a slow drift of each
+    cycle's values: ``k``; the same cycle still drifting by more than the tolerance a cycle: 0."""
+    k = len(cycle)
+    settled = _period_speeds(cycle, 12 * k, drift=0.3, noise=1e-7)
+    assert settling.other_period(settled, 1e-4) == k
+    drifting = _period_speeds(cycle, 12 * k, drift=0.999)  # (each cycle 1e-5 of its values on)
+    assert settling.other_period(drifting, 1e-6) == 0
+
+
+@pytest.mark.parametrize("lam", [0.5, -0.5, -0.9, -0.97, -0.99])
+def test_other_period_takes_no_oscillation_that_decays_onto_one_impact(lam):
+    """Impact velocities settling onto a one-impact orbit along a real multiplier ``lam`` (flipping
+    sign each impact for ``lam < 0``, a cycle of two that repeats to less and less): 0 at every
+    length, though near ``lam = -1`` they repeat every second impact 100 times closer than
+    consecutive ones differ."""
+    v = 0.46 * (1.0 + 1e-2 * lam ** np.arange(600))
+    assert all(settling.other_period(v[:n], 1e-4) == 0 for n in range(2, 601))
+    assert settling.other_period(np.full(20, 0.46), 1e-4) == 0

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from drifter_optimum import EXAMPLE, collar
+from drifter_optimum import EXAMPLE, SEARCHED, collar
 
 from impactbar.orbits import coupled
 from impactbar.physical import build, read_config, with_values
@@ -45,6 +45,24 @@ def test_a_design_without_an_orbit_costs_about_what_one_with_an_orbit_costs(monk
     # where before the chord and then Newton's method took their 50 steps each (907 blows, 15 s)
     assert isinstance(err, ValueError) and "Newton stalled" in str(err)
     assert n_fail <= 3 * n_ok, (n_fail, n_ok)  # 64 against 35 blows
+
+
+def test_a_design_whose_motion_from_rest_alternates_hands_newton_its_start_at_once(monkeypatch):
+    """A design the optimiser's search met (SEARCHED): followed from rest to Newton's start its
+    impact velocities alternate; Newton starts there, not after the 400 impacts of a motion that never
+    settles into one impact a period, and gives up as before (it stalls); a run of simulate from rest
+    alternates the same way."""
+    n_ok, _ = _blows(monkeypatch, collar(1.003))
+    n_fail, err = _blows(monkeypatch, SEARCHED)
+    assert isinstance(err, ValueError) and "Newton stalled" in str(err)
+    assert "followed until its impacts settle (into 2 impacts per period by its" in str(err)
+    assert n_fail <= 3 * n_ok, (n_fail, n_ok)  # 63 against 35 blows (443 when followed 400 impacts)
+    cfg, folder = read_config(EXAMPLE)
+    v = build(with_values(cfg, SEARCHED), folder).simulate(2.2, histories=False)["impact_velocities_m_s"]
+    # from rest the blows grow with the supply pressure, then (about the 80th) alternate 0.16 % apart,
+    # a cycle of two repeating to 3e-5 by the 110th
+    assert v.size > 100 and np.all(np.abs(v[-6:] - v[-8:-2]) <= 1e-4 * v[-1])
+    assert np.all(np.abs(np.diff(v[-6:])) >= 1.5e-3 * v[-1])
 
 
 def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_there():

@@ -34,6 +34,7 @@ from ._settling import (
     drifting,
     expanding_to_surface,
     nearing,
+    other_period,
     surfaces_ahead,
 )
 from ._shooting_data import orbit_data
@@ -136,6 +137,7 @@ class ShootingProblem(OrbitProblem):
 
     default_start = "the motion from rest on the stop, followed until its impacts settle"
     starts_from_rest = True
+    settled_into = None  # (k, impacts followed): the motion followed to a start settled into k > 1
 
     def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None,
                  *, newton: str = "chord"):
@@ -358,8 +360,9 @@ class ShootingProblem(OrbitProblem):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
         impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
         ``1e-4`` for a drive with variational flights; a drift too slow to tell at that tolerance
-        carried to the switching surface ahead of it, :meth:`_carried`), and take the starts of the
-        last ``m`` intervals as the blocks (with the impacts before them)."""
+        carried to the switching surface ahead of it, :meth:`_carried`; ``m = 1``, variational: or
+        every ``k > 1`` impacts, :func:`~._settling.other_period`, noted in ``settled_into``), and
+        take the starts of the last ``m`` intervals as the blocks (with the impacts before them)."""
         m, M = self.impacts, self.M
         # a drive whose flights give Newton the exact Jacobian (variational equations) is handed
         # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
@@ -377,6 +380,7 @@ class ShootingProblem(OrbitProblem):
         # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
         loose = self._loose() if self.variational else None
         budget, count = n_max, 0
+        other, self.settled_into = self.variational and m == 1 and n_max > m, None
         while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
             count += 1
             tau, mode, y, source, speed = self._follow(tau, mode, y, loose)
@@ -399,6 +403,9 @@ class ShootingProblem(OrbitProblem):
                     count, speeds, iterates = count + len(carried), [], 1
                     continue
                 budget = max(budget, SETTLE_DRIFT_IMPACTS)
+            elif other and (k := other_period(speeds, settle)):
+                self.settled_into = (k, count)
+                break
             if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode == hist[-4].mode:
                 star = dominant_limit(hist[-4].y, hist[-3].y, hist[-2].y, y)
                 if star is None:  # (steps that grow: no limit ahead, the drift carried to a surface)
