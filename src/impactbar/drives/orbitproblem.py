@@ -116,6 +116,9 @@ class OrbitProblem(ABC):
     starts_from_rest : bool
         Whether that start already is the motion from rest on the stop followed until it settles
         (the default guess chain of :func:`impactbar.find_orbit` then skips its own run from rest).
+    settled_into : tuple of int or None
+        Where :meth:`initial` followed a motion that settled into ``k > 1`` impacts a period, not
+        the ``impacts`` asked for: ``(k, impacts followed)`` (the chain's error says so); ``None``.
     """
 
     model: Any
@@ -125,6 +128,7 @@ class OrbitProblem(ABC):
     positive: np.ndarray
     default_start: str = "the drive's default start"
     starts_from_rest: bool = False
+    settled_into: tuple | None = None
 
     @abstractmethod
     def initial(self, guess, tol: float, max_iter: int) -> np.ndarray:

@@ -215,7 +215,7 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
     def attempt(what, start):
         try:
             X0 = start()
-            other = getattr(problem, "settled_into", None)  # (the motion followed: another period)
+            other = problem.settled_into  # (the motion followed: another period)
             if other is not None:
                 what += f" (into {other[0]} impacts per period by its {other[1]}th)"
             X = _solve(problem, X0, tol, max_iter)

@@ -137,7 +137,6 @@ class ShootingProblem(OrbitProblem):
 
     default_start = "the motion from rest on the stop, followed until its impacts settle"
     starts_from_rest = True
-    settled_into = None  # (k, impacts followed): the motion followed to a start settled into k > 1
 
     def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None,
                  *, newton: str = "chord"):
