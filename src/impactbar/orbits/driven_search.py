@@ -215,9 +215,9 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
     def attempt(what, start):
         try:
             X0 = start()
-            other = problem.settled_into  # (the motion followed: another period)
-            if other is not None:
-                what += f" (into {other[0]} impacts per period by its {other[1]}th)"
+            if problem.settled_into is not None:  # (the motion followed: another period)
+                k, followed = problem.settled_into
+                what += f" (into {k} impacts per period by its {followed}th)"
             X = _solve(problem, X0, tol, max_iter)
             orbit = _motion(orbit_of(problem, X))
         except ValueError as err:

@@ -77,6 +77,11 @@ __all__ = ["exact_impact_map", "tangents"]
 
 #: rows of the primal's switch log first asked for (doubled while it overflows)
 LOG_ROWS = 64
+#: the columns of an impulse of the arriving wave's derivative (``tangents``' ``pulses``): its arrival
+#: time, its weight
+PULSE_T, PULSE_W = 0, 1
+#: the piston's first segment, among the segments' travel times
+FIRST = 0
 
 
 def _primal(bmap, q, v):
@@ -218,7 +223,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
             _, status = TG.t_batch(wt, tg, template, slots, coefs, imps, out, ends, travel, om)
         else:
             status, dG, pulses = _arriving_runs(wt, tg, template, slots, coefs, imps, out, ends, travel, om,
-                                                np.asarray(arriving, dtype=float) - travel[0])
+                                                np.asarray(arriving, dtype=float) - travel[FIRST])
         if status == 0:
             break
         if status == 3:
@@ -235,8 +240,8 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     if arriving is None:
         return dq, dv, ends[:, END_SEPS:].astype(int)
     for d in range(K):
-        pulses[d][:, 0] += travel[0]
-        pulses[d][:, 1] *= scales[d]
+        pulses[d][:, PULSE_T] += travel[FIRST]
+        pulses[d][:, PULSE_W] *= scales[d]
     return dq, dv, ends[:, END_SEPS:].astype(int), dG * scales[:, None], pulses
 
 
@@ -261,7 +266,7 @@ def _arriving_runs(wt, tg, template, slots, coefs, imps, out, ends, travel, om, 
             return status, None, None
         PF, PI, TK, TC, _, CHI = wt[:6]
         # the pool keeps a wave channel's pieces from its first, the c-th piece (exactresult)
-        dG[d] = _eval_channel((PF, PI, TK, TC, CHI, wt[8], lamk), 1, emitted, 0, head=1)
+        dG[d] = _eval_channel((PF, PI, TK, TC, CHI, wt[WS_LAM], lamk), 1, emitted, 0, head=1)
         pulses.append(_channel_impulses(tg, 1))
     return 0, dG, pulses
 
