@@ -137,11 +137,8 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
 
     Parameters
     ----------
-    s, R : float
-        Wave-speed ratio and restitution of the bar model.
-    n_modes : int
-        ``N``.
-    load : Load
+    s, R, n_modes, load
+        As for :func:`window_drive`.
     t0s : array_like, shape (P,)
         Load times at which contact starts.
 
