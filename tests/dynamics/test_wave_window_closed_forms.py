@@ -104,3 +104,24 @@ def test_compiled_moments_of_a_piecewise_constant_drive_against_quad(n):
                         ref = sum(quad(drive, a, b, weight=weight, wvar=k * math.pi, epsabs=1e-14)[0]
                                   for a, b in zip(edges[:-1], edges[1:], strict=True))
                         assert got == pytest.approx(ref, abs=1e-13)
+
+
+@pytest.mark.parametrize("load", LOADS, ids=lambda x: type(x).__name__)
+@pytest.mark.parametrize("n", [0, 8, 48])
+def test_many_starts_are_each_start_to_the_bit(load, n):
+    """The phase series' drives at all its starts at once: the single start's numbers, to the bit
+    (the compiled quadrature for a Fourier load below 48 modes, start by start otherwise)."""
+    t0s = 2.0 * math.pi * np.arange(7) / 7 + 0.3
+    g, h = impact.window_drives(3.0, 0.4, n, load, t0s)
+    assert g.shape == h.shape == (7, n + 1)
+    for i, t0 in enumerate(t0s):
+        g1, h1 = impact.window_drive(3.0, 0.4, n, load, float(t0))
+        assert np.array_equal(g[i], g1) and np.array_equal(h[i], h1)
+
+
+def test_many_starts_of_a_constant_drive():
+    # a constant p0 over the window: h_0 = (1 - R) p0 / s (the momentum it gives), h_n = 0 for
+    # n >= 1 (int cos(n pi theta) vanishes over [0, 1] and [1, 2] alike)
+    g, h = impact.window_drives(3.0, 0.4, 5, FourierLoad(0.7, [0.0]), np.array([0.2, 4.0]))
+    np.testing.assert_allclose(h[:, 0], 0.6 * 0.7 / 3.0, rtol=1e-14)
+    np.testing.assert_allclose(h[:, 1:], 0.0, atol=1e-15)

@@ -2,13 +2,16 @@
 
 import json
 import math
+from collections import Counter
 
 import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, periodic_orbits
 from impactbar.cli import main
+from impactbar.orbits import charts
 from impactbar.orbits.charts import (
+    find_sign_changes,
     hydraulic_existence_edge,
     pneumatic_existence_edge,
     pneumatic_stability_curve,
@@ -49,6 +52,46 @@ def test_paper_criterion_with_flexible_sigma_matches_eq37_eq39():
     # the exact multipliers disagree near resonance (s pi = 10.1 against k = 10)
     exact = pneumatic_stability_edges(model, k)
     assert exact and abs(exact[-1][0] - cf) > 0.1
+
+
+def test_sign_changes_evaluate_each_point_once():
+    """Brent's first two evaluations are the scan's ends: read back, the roots are Brent's own on
+    the same bracket to the bit, and no point is evaluated twice."""
+    from scipy.optimize import brentq
+
+    seen = Counter()
+
+    def h(x):
+        seen[float(x)] += 1
+        return (x - 0.3) * (x - 1.1) * (x + 0.7)
+
+    roots = find_sign_changes(h, -1.0, 2.0, n_scan=7)
+    assert roots == pytest.approx([-0.7, 0.3, 1.1], abs=1e-12)
+    xs = np.linspace(-1.0, 2.0, 7)
+    assert roots == [brentq(h, a, b, xtol=1e-12, rtol=8.9e-16) for a, b in zip(xs[:-1], xs[1:], strict=True)
+                     if h(a) * h(b) < 0.0]
+    seen.clear()
+    find_sign_changes(h, -1.0, 2.0, n_scan=7)
+    assert max(seen.values()) == 1
+
+
+def test_stability_edges_evaluate_each_load_factor_once(monkeypatch):
+    """The scan, Brent's iterates and the root's classification share each load factor's
+    multipliers; the edge is still eq. 39's."""
+    seen = Counter()
+    branch = charts._stable_branch_phase
+
+    def counted(model, load):
+        seen[load.p0] += 1
+        return branch(model, load)
+
+    monkeypatch.setattr(charts, "_stable_branch_phase", counted)
+    r = 0.5
+    (edge, kind), = pneumatic_stability_edges(BarModel(50.0, 0.0, r, 0), 1)
+    eq39 = (1 + r) ** 2 / math.sqrt(4 * (1 + r * r) ** 2 + math.pi**2 * (1 - r * r) ** 2)
+    assert edge == pytest.approx(eq39, abs=1e-8)
+    assert kind == "period-doubling"
+    assert max(seen.values()) == 1
 
 
 def test_hydraulic_edge_closed_form():

@@ -82,9 +82,20 @@ def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_sc
     Returns
     -------
     list of float
+
+    Notes
+    -----
+    Brent's method starts by evaluating ``h`` at the bracket's ends: those are the scan's values,
+    read back instead of computed again (the same numbers, so the same iterates).
     """
     xs = np.linspace(lo, hi, n_scan)
     hs = np.array([h(x) for x in xs])
+    scanned = dict(zip(xs.tolist(), hs.tolist(), strict=True))
+
+    def f(x):
+        v = scanned.get(x)
+        return h(x) if v is None else v
+
     out = []
     for a, b, ha, hb in zip(xs[:-1], xs[1:], hs[:-1], hs[1:], strict=True):
         if not (np.isfinite(ha) and np.isfinite(hb)):
@@ -92,7 +103,7 @@ def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_sc
         if ha == 0.0:
             out.append(float(a))
         elif ha * hb < 0.0:
-            out.append(brentq(h, a, b, xtol=xtol, rtol=8.9e-16))
+            out.append(brentq(f, a, b, xtol=xtol, rtol=8.9e-16))
     if np.isfinite(hs[-1]) and hs[-1] == 0.0:
         out.append(float(xs[-1]))
     return out
@@ -198,14 +209,21 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
         return []
     hi = min(edge, 50.0) * (1.0 - 1e-9)
 
+    known = {}  # each load factor's multipliers once: the root Brent returns is one it evaluated
+
     def mu(lf):
+        if lf in known:
+            return known[lf]
         load = CosineLoad(lf / k, 1.0, k)
         ph = _stable_branch_phase(model, load)
         if ph is None:
-            return None
-        if criterion == "paper":  # the paper's bounds (eq. 39) come from its rigid block (eqs. 29, 30)
-            return orbit_multipliers(model, load, ph, paper=True)[:2]
-        return orbit_multipliers(model, load, ph)
+            m = None
+        elif criterion == "paper":  # the paper's bounds (eq. 39) come from its rigid block (eqs. 29, 30)
+            m = orbit_multipliers(model, load, ph, paper=True)[:2]
+        else:
+            m = orbit_multipliers(model, load, ph)
+        known[lf] = m
+        return m
 
     def h(lf):
         m = mu(lf)

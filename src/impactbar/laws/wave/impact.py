@@ -35,7 +35,7 @@ from ...dynamics.implementations import use_fast
 from . import _window as KW
 from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad, held_post_state, held_throughout
 
-__all__ = ["WaveImpact", "wave_impact", "window_drive"]
+__all__ = ["WaveImpact", "wave_impact", "window_drive", "window_drives"]
 
 
 def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: bool = False):
@@ -81,9 +81,7 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact
     elif view is not None:  # the compiled quadrature (the same panels)
-        mc, ms = np.zeros((2, n_modes + 1)), np.zeros((2, n_modes + 1))
-        KW.window_moments(tuple(view), s, wl.rate, t0, np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
-        (ca, cb), (sa, sb) = mc, ms
+        (ca, cb), (sa, sb) = _kernel_moments(tuple(view), s, wl.rate, t0, wl.jumps, n_modes + 1)
     else:
         h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)
         out = {}
@@ -93,9 +91,7 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
             arg = np.multiply.outer(npi, th)
             out[name] = (np.cos(arg) @ pw, np.sin(arg) @ pw)
         (ca, sa), (cb, sb) = out["a"], out["b"]
-    h = (cb - R * ca) / s
-    g = np.zeros(n_modes + 1)
-    g[1:] = -(sb[1:] - R * sa[1:]) / (s * s * npi[1:])
+    g, h = _drive_parts(s, R, npi, ca, cb, sa, sb)
     if not derivative:
         return g, h
     sign = (-1.0) ** np.arange(n_modes + 1)
@@ -112,6 +108,56 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
 #: From this many modes on, :func:`window_drive` takes the moments in closed form (below it the
 #: compiled quadrature is the faster one)
 _CLOSED_FROM = 48
+
+
+def _kernel_moments(view: tuple, s: float, rate: float, t0: float, jumps, M: int):
+    """The compiled quadrature's moments ``(cos (2, M), sin (2, M))`` of :func:`window_drive`, the
+    load's kernel view as a plain tuple."""
+    mc, ms = np.zeros((2, M)), np.zeros((2, M))
+    KW.window_moments(view, s, rate, t0, np.ascontiguousarray(jumps), _GL_X, _GL_W, mc, ms)
+    return mc, ms
+
+
+def _drive_parts(s: float, R: float, npi, ca, cb, sa, sb):
+    """``(g, h)`` of :func:`window_drive` from the moments (each may carry a leading axis of starts)."""
+    h = (cb - R * ca) / s
+    g = np.zeros(cb.shape)
+    g[..., 1:] = -(sb[..., 1:] - R * sa[..., 1:]) / (s * s * npi[1:])
+    return g, h
+
+
+def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`window_drive` at many starts of contact (theory §4b), without the derivative.
+
+    The same numbers as :func:`window_drive` start by start, to the bit; under a load with a
+    compiled view and no jumps, and fewer than ``_CLOSED_FROM`` modes (the compiled quadrature),
+    what does not depend on the start (the view, the load's rate, ``n pi``) is set up once and the
+    drive's parts come from the moments of all starts at once (the phase series of
+    :mod:`impactbar.laws.wave.periodic` takes ``2 K + 1`` starts per load).
+
+    Parameters
+    ----------
+    s, R, n_modes, load
+        As for :func:`window_drive`.
+    t0s : array_like, shape (P,)
+        Load times at which contact starts.
+
+    Returns
+    -------
+    g, h : numpy.ndarray, shape (P, N + 1)
+        The displacement and velocity parts of each start.
+    """
+    t0s = np.asarray(t0s, dtype=float).ravel()
+    own = load.abilities
+    if own.kernel is None or own.jumps is not None or n_modes >= _CLOSED_FROM or not t0s.size:
+        drives = [window_drive(s, R, n_modes, load, float(t)) for t in t0s]
+        return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
+                np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
+    view, rate, none = tuple(own.kernel.view), _WindowLoad(load, s, float(t0s[0])).rate, np.empty(0)
+    mc, ms = np.empty((t0s.size, 2, n_modes + 1)), np.empty((t0s.size, 2, n_modes + 1))
+    for i, t0 in enumerate(t0s.tolist()):
+        mc[i], ms[i] = _kernel_moments(view, s, rate, t0, none, n_modes + 1)
+    return _drive_parts(s, R, math.pi * np.arange(n_modes + 1), mc[:, 0], mc[:, 1], ms[:, 0], ms[:, 1])
 
 
 def _unit_moment(w):

@@ -45,7 +45,7 @@ from ...dynamics.monodromy import aberth, arrival_derivative, impact_fields, sor
 from ...loads import FourierLoad, Load, PiecewiseConstantLoad
 from ...loads.abilities import compiled_kind
 from ..base import BarModelLike, OrbitState
-from .impact import _wave_impact, window_drive
+from .impact import _wave_impact, window_drive, window_drives
 
 __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_phase_families",
            "wave_impact_map_jacobian", "wave_floquet_multipliers", "wave_existence_edge", "window_map",
@@ -177,8 +177,7 @@ def _state_series(model: BarModelLike, load: FourierLoad) -> np.ndarray:
     Ms = 2 * K + 1
     phases = TWO_PI * np.arange(Ms) / Ms
     N = model.n_modes
-    drives = [window_drive(model.s, model.R, N, load, float(p)) for p in phases]
-    g, h = np.array([a for a, _ in drives]), np.array([b for _, b in drives])
+    g, h = window_drives(model.s, model.R, N, load, phases)
     _, y_end, y_minus = _periodic_solve(model, _forced_flights(model, load, phases), g, h)
     coef = np.fft.fft(np.concatenate((y_end, y_minus, g, h), axis=1), axis=0)[:K + 1] / Ms
     coef.flags.writeable = False
