@@ -1,6 +1,6 @@
 r"""The oil circuit's flights through the code generated for its network's topology
-(``circuit_flight(generated=True)``: ``_netgen``'s kernels and C callbacks) against the preset's
-hand-written kernels (``generated=False``, the way before), in the same run, alternated: one plain
+(``circuit_flight``: ``_netgen``'s kernels and C callbacks) against the preset's hand-written kernels
+(``kernels=circuit_field_reference.KERNELS``, the tests' reference), in the same run, alternated: one plain
 flight of the rigid piston and one variational flight with 4 modes of the preset ``circuit-drifter``
 from the start of its orbit search, each checked the same to the bit.
 
@@ -10,13 +10,18 @@ Usage: ``python benchmarks/bench_circuit_generated.py [--rounds R]`` (CPU second
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from impactbar.drives import DriveState
 from impactbar.drives.circuit import flight as F
 from impactbar.physical import circuit_preset
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import circuit_field_reference as K  # noqa: E402  (the preset's kernel written by hand: the tests' reference)
 
 
 def _case(drive, model, variational):
@@ -27,7 +32,7 @@ def _case(drive, model, variational):
 
     def run(generated):
         return F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=variational,
-                                generated=generated)
+                                kernels=None if generated else K.KERNELS)
     return run
 
 

@@ -1,8 +1,9 @@
 """The oil circuit's network of part records (``impactbar.drives.circuit._network``) and the code
 generated for its topology (``_netgen.generate``) against the circuit's hand-written kernel
-(``_field._base``, ``jac_base``, ``circuit_events``), in the same run: the time of one call of the
-vector field, of its Jacobian and of the events at the preset drifter's state, rigid and with four
-flexible modes (the three give the same numbers to the bit: ``tests/drives/test_circuit_network.py``).
+(``tests/circuit_field_reference.py``: ``_base``, ``jac_base``, ``circuit_events``), in the same run:
+the time of one call of the vector field, of its Jacobian and of the events at the preset drifter's
+state, rigid and with four flexible modes (the three give the same numbers to the bit:
+``tests/drives/test_circuit_network.py``).
 
 Run: ``python benchmarks/bench_circuit_network.py [--mode 1110]``. Each call repeated in a compiled
 loop (so that the Python call is not timed), the best of a few repetitions of CPU time, the two
@@ -19,11 +20,12 @@ from pathlib import Path
 import numba as nb
 import numpy as np
 
-from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit import _netgen as NG
 from impactbar.physical import circuit_preset
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "drives"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import circuit_field_reference as K  # noqa: E402, I001  (the preset's kernel by hand: the tests' reference)
 import network_interpreter as NW  # noqa: E402  (the interpreter of any network: the tests' reference)
 
 

@@ -61,7 +61,6 @@ NOT_RECORDS = {
                                "tests"},  # sequences' first and last entries
     "continuation/two_parameter.py": {"e2", "names", "points", "vt"},  # the two parameters, a unit vector
     "drives/circuit/_cvode.py": {"tret"},  # CVODE's one-slot return time
-    "drives/circuit/_endfield.py": {"buf", "dut", "yp"},  # the bar state and its derivative's components
     "drives/circuit/_magnus.py": {"_T18", "_T8_A"},  # the Taylor scheme's coefficient rows
     "drives/circuit/_sundials.py": {"hits"},  # the first root found
     "drives/circuit/endflight.py": {"breaks", "ts", "y0", "ext_fn"},  # sequences' ends; a one-slot box
@@ -198,11 +197,10 @@ WIDER_NOT_RECORDS = {
     # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
     # series' last
     "drives/base.py": {"q", "v"},
+    "drives/circuit/_bar.py": {"y"},  # y: a state vector's components ([0] the rigid mode)
     # T: a time grid's first and last; Y: rows of states: the first and last; callbacks: the first
     # callback
     "drives/circuit/_cvode.py": {"T", "Y", "callbacks"},
-    "drives/circuit/_endfield.py": {"y"},  # y: a state vector's components
-    "drives/circuit/_field.py": {"y"},  # y: a state vector's components
     # W: a stack of like matrices, each named where taken; c: a coefficient array's entries; q: the
     # modal coordinates: [0] the rigid mode
     "drives/circuit/_magnus.py": {"W", "c", "q"},
@@ -693,7 +691,6 @@ NOT_COLUMN_RECORDS = {
     "continuation/driven.py": {"J": MATRIX, "P": PARAMETER},
     "continuation/one_parameter.py": {"J": MATRIX, "P": PARAMETER},
     "continuation/two_parameter.py": {"P": PARAMETER, "uu": MATRIX},
-    "drives/circuit/_endfield.py": {"A": MATRIX, "JJ": MATRIX},
     "drives/circuit/endflight.py": {"self._at([t])": ONE_TIME},
     "drives/flight.py": {"sol.y": LAST_TIME},
     "drives/orbitproblem.py": {"P": MATRIX, "Q": MATRIX},

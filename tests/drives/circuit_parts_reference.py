@@ -216,7 +216,7 @@ def both_ways(y, gap, par, M, n, n_energy, n_events, gen=None):
     ``(out, g, A, gen)``, the interpreter's three and the generated module."""
     import network_interpreter as NI
 
-    from impactbar.drives.circuit import _field as K
+    from impactbar.drives.circuit import _bar as K
     from impactbar.drives.circuit import _netgen as NG
 
     if gen is None:

@@ -3,7 +3,7 @@ compiled vector field, Jacobian and set of event functions that read any network
 bar's entries of ``par`` (the loops over the records; the equations of each kind in
 ``_network``'s docstring). The library runs the code generated for a network's topology
 (``_netgen``), which the tests check against this interpreter (and both against the hand-written
-kernel ``_field`` for the preset drifter) to the bit.
+kernel ``circuit_field_reference`` for the preset drifter) to the bit.
 
 The sums run in the order of the records, from ``-0.0`` (so that a sum's first term is that term,
 sign of a zero included).
@@ -13,7 +13,7 @@ import numba as nb
 import numpy as np
 
 from impactbar.drives.circuit import kinds as KD
-from impactbar.drives.circuit._field import DAMP, HEAD, _off_level, dphi, end_motion, phi
+from impactbar.drives.circuit._bar import DAMP, HEAD, end_motion
 from impactbar.drives.circuit._network import (
     A_E,
     A_EV,
@@ -83,6 +83,8 @@ from impactbar.drives.circuit._network import (
     V_T,
     VALVE,
 )
+from impactbar.drives.circuit.kinds._flow import dphi, phi
+from impactbar.drives.circuit.kinds.level import _off_level
 from impactbar.dynamics.compiled import CACHE
 
 # the rows of the nodes' scratch
@@ -443,8 +445,8 @@ def events(z, par, M, g, first, gap):
     """The network's event functions into ``g[first:first + n_events]`` from the circuit's state
     ``z = (p_0..p_{S-1}, x_v)`` and the piston's gap ``gap`` (the inactive ones held at 1): each
     valve's ramp end, each watched accumulator's and relief's pressure level
-    (:func:`impactbar.drives.circuit._field._off_level`), each watched level of the gap or of a pressure drop
-    (:mod:`.kinds.level`)."""
+    (:func:`impactbar.drives.circuit.kinds.level._off_level`), each watched level of the gap or of a
+    pressure drop (:mod:`.kinds.level`)."""
     net0 = HEAD + 3 * M
     nrec = int(par[net0 + NW_NREC])
     nn = int(par[net0 + NW_NNODE])

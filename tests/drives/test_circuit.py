@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import circuit_field_reference as K
 from impactbar import BarModel, InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
 from impactbar.drives import DriveState
 from impactbar.drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
-from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit.flight import circuit_flight
 from impactbar.drives.circuit.settings import CircuitFlightSettings
 from impactbar.drives.flight import ARRIVAL

@@ -210,7 +210,7 @@ def test_a_circuit_flight_takes_scipys_steps_to_cvodes_event(stroke):
     flag, t, y, y_end, roots, counts = code.dop853_fly(0.0, y0, 1.0, 1e-12, 1e-14, directions, par, y0.size,
                                                        100000, 0.0)
     assert flag == DP.DOP853_ROOT
-    hit = F.K.ARRIVAL_EV if cvode.end == F.ARRIVAL else None
+    hit = F.ARRIVAL_EV if cvode.end == F.ARRIVAL else None
     assert hit is None or roots[hit] != 0
     assert t[-1] == pytest.approx(cvode.t, abs=1e-11)
     n = cvode.q.size

@@ -14,6 +14,7 @@ import re
 import numpy as np
 import pytest
 
+import circuit_field_reference as K
 from impactbar.drives.circuit import (
     Accumulator,
     Chambers,
@@ -23,7 +24,6 @@ from impactbar.drives.circuit import (
     Supply,
     Valve,
 )
-from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit.drive import _rate_model
 from impactbar.drives.circuit.layout import PRESET, CircuitLayout
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import circuit_field_reference as K
 from impactbar import find_orbit
 from impactbar.drives.circuit import CircuitFlightSettings
 from impactbar.drives.circuit import flight as F
@@ -138,8 +139,8 @@ def test_each_flight_takes_the_method_asked(case):
     assert method(model, "cvode") == "adams"  # (the way before DOP853)
     assert method(model, "cvode", variational=True) == "adams"
     assert method(rigid, "cvode") == "bdf"
-    with pytest.raises(ValueError, match="generated"):
-        method(model, "dop853", generated=False)
+    with pytest.raises(ValueError, match="kernels=None"):
+        method(model, "dop853", kernels=K.KERNELS)
     # oil stiffer: Adams between the thresholds, BDF beyond
     for k, want in ((5.0, "adams"), (100.0, "bdf")):
         stiff = _stiffer(case[0], k)

@@ -2,10 +2,10 @@
 describes itself as records, the drive composes them, and one compiled vector field, Jacobian and set
 of event functions serves every topology.
 
-- The preset drifter's records against the circuit's own kernel (``_field._base``, ``jac_base``,
-  ``circuit_events``): the same numbers to the bit (the sign of a zero included) at random states, in
-  every mode, rigid and with four flexible modes, with a pump and with a held supply, with and without
-  an accumulator and a relief valve; and the code generated for the network's topology
+- The preset drifter's records against the preset's kernel written by hand (``circuit_field_reference``:
+  ``_base``, ``jac_base``, ``circuit_events``): the same numbers to the bit (the sign of a zero included)
+  at random states, in every mode, rigid and with four flexible modes, with a pump and with a held supply,
+  with and without an accumulator and a relief valve; and the code generated for the network's topology
   (``_netgen.generate``) the same numbers again.
 - A circuit the kernel cannot describe, a return-line accumulator (a node between the valve's
   return port and the tank, with a gas accumulator and an orifice to the tank), defined here alone:
@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 from circuit_parts_reference import network_jacobian_fd
 
+import circuit_field_reference as K
 from impactbar.drives.circuit import Accumulator, Oil, Supply
-from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit import _netgen as NG
 from impactbar.drives.circuit import _network as NW
 from impactbar.physical import circuit_preset
@@ -299,9 +299,9 @@ def test_the_generated_module_is_written_once_and_compiled_in_memory_where_it_ca
 @pytest.mark.parametrize("modes", [0, 2])
 @pytest.mark.parametrize("variant", ["preset", "held"])
 def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, variant, variational, modes):
-    """``circuit_flight(generated=True)`` (the flight's kernels and CVODE's C callbacks generated for
-    the network's topology, the network read from ``par``) against ``generated=False`` (the preset's
-    hand-written kernels and callbacks): the same steps, states, rates and fundamental matrix, to the
+    """``circuit_flight`` (the flight's kernels and CVODE's C callbacks generated for the network's
+    topology, the network read from ``par``) against ``kernels=circuit_field_reference.KERNELS`` (the
+    preset's hand-written kernels and callbacks): the same steps, states, rates and fundamental matrix, to the
     bit, by the compiled driver and (plain) through scikit-sundae's interface (CVODE's methods:
     Adams-Moulton for the flexible piston's plain flights, which ``"auto"`` gives the generated
     code's DOP853)."""
@@ -320,8 +320,8 @@ def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, 
     for compiled in (True, False) if not variational else (True,):
         settings = CircuitFlightSettings(compiled=compiled, sensitivity="cvode",
                                          multistep="adams" if modes and not variational else "auto")
-        a, b = (F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, settings, variational, generated=g)
-                for g in (True, False))
+        a, b = (F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, settings, variational, kernels=k)
+                for k in (None, K.KERNELS))
         assert a.end == b.end and a.t == b.t and a.piece.t.size > 50
         for x, y in ((a.piece.t, b.piece.t), (a.piece.y, b.piece.y), (a.piece.f, b.piece.f), (a.q, b.q),
                      (a.v, b.v), (a.z, b.z)):
@@ -331,3 +331,47 @@ def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, 
     net, code = drive._compiled_network((1, 1, 1, 0))
     assert code.CALLBACKS is not None and code.CALLBACKS[-1] == K.N_EVENTS
     assert np.array_equal(net, drive._network((1, 1, 1, 0)))
+
+
+# -- the library runs the generated kernel only ----------------------------------------------------------
+
+#: the preset's scalars in ``par`` (``_bar``) that only equations of the preset written by hand read: the
+#: generated code reads each part's values from its records
+_PRESET_SCALARS = {"NUR", "NUF", "KV", "KF", "QP", "NUS", "PT", "PREL", "KREL", "P0", "NU0", "NPOL", "BETA",
+                   "PTR2", "HELD", "PSH", "ACC", "REL", "XRATE", "OPEN", "HASREL", "HASACC"}
+
+
+def _hand_written_reads(path):
+    """``(function, index)`` of each read ``par[X]`` of a preset scalar (:data:`_PRESET_SCALARS`, bare
+    or as a module's attribute) inside a compiled function (``njit`` or ``cfunc``) of ``path``."""
+    import ast
+
+    found = []
+    for fn in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(fn, ast.FunctionDef) or not any(
+                "njit" in ast.unparse(d) or "cfunc" in ast.unparse(d) for d in fn.decorator_list):
+            continue
+        for node in ast.walk(fn):
+            if isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Load):
+                key = node.slice
+                name = key.id if isinstance(key, ast.Name) else key.attr if isinstance(key, ast.Attribute) \
+                    else None
+                if name in _PRESET_SCALARS:
+                    found.append((fn.name, name))
+    return found
+
+
+def test_no_library_module_holds_the_preset_circuits_equations_by_hand():
+    """The flights, the variational flights and the blows run the code generated for the circuit's
+    network from its parts' records: no compiled function of the library reads a preset scalar of
+    ``par`` (the equations of the preset written by hand, kept as the tests' reference in
+    ``circuit_field_reference``, ``circuit_blow_reference``, which the scan does find)."""
+    from pathlib import Path
+
+    import impactbar.drives.circuit as pkg
+
+    root = Path(pkg.__file__).parent
+    found = {str(p.relative_to(root)): r for p in sorted(root.rglob("*.py")) if (r := _hand_written_reads(p))}
+    assert found == {}
+    reference = Path(__file__).resolve().parents[1] / "circuit_field_reference.py"
+    assert {f for f, _ in _hand_written_reads(reference)} >= {"_flows", "_base", "jac_base", "circuit_events"}

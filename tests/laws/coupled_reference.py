@@ -9,7 +9,7 @@ continuous, ``N = 2 (Z_b F_a + Z_a G_b) / (Z_a + Z_b)``; the piston-shank contac
 free ends and an integrated gap while open) or carry ordinary differential equations: the piston's
 driven end, loaded by the circuit's force ``p = p_r - alpha p_f`` (``F_0 = p - G_in``, the end
 moving at ``(p - 2 G_in) / Z_0``, which drives the circuit's vector field: the library's compiled
-one, :func:`impactbar.drives.circuit._endfield.rhs`, with ``a = -2 G_in / Z_0``), and the bit, a
+one written by hand, ``circuit_blow_reference.rhs``, with ``a = -2 G_in / Z_0``), and the bit, a
 mass on Lundberg's bilinear rock under the feed, ``m p'' + Z p' + R(p) = 2 F_in + f``. The rod's
 waves are those above its static state under the feed (at rest at impact, the rock loaded to the
 feed); the piston's are total, its fields at impact those of a rigid piston under the force ``p``
@@ -233,7 +233,7 @@ def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14, dura
     >>> list(inspect.signature(reference_blow).parameters)[:5]
     ['model', 'drive', 'state', 'q', 'v']
     """
-    from impactbar.drives.circuit import _endfield as EK
+    import circuit_blow_reference as EK
     from impactbar.drives.circuit.drive import _rate_model
 
     law = model.law

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from impactbar import physical
-from impactbar.drives.circuit._field import phi
+from impactbar.drives.circuit.kinds._flow import phi
 
 
 def test_the_turbulent_coefficient_passes_the_nominal_flow():

@@ -16,9 +16,10 @@ each in a module of its own, ``kinds``: :data:`LEAK`, :data:`CUSHION`, :data:`CH
 ``leakage``, ``cushion``, ``check_valve``, ``spool_valve`` (:class:`LaminarLeak`, :class:`Cushion`,
 :class:`CheckValve`, :class:`SpoolValve`: parts of a drill's circuit; the spool valve stands in for
 the valve, of the kinds :data:`SPOOL` and :data:`SPOOL_PORT`), ``flight`` (one
-flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_field`` (the
-compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
-compiled code, on the SUNDIALS libraries that scikit-sundae ships).
+flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_netgen`` and
+``_endgen`` (the compiled vector field, Jacobian and event functions generated for the network's
+topology, a flight's and a blow's; ``_bar`` the bar's share of them), ``_sundials`` and ``_cvode``
+(CVODE driven from compiled code, on the SUNDIALS libraries that scikit-sundae ships).
 """
 
 from ._network import ACCUM as ACCUM

@@ -2,9 +2,10 @@ r"""CVODE driven from compiled code: one flight of the circuit in one call of ma
 
 The flight's loop (:func:`fly`: ``CVode`` in one-step mode, each step's state kept) is compiled by
 numba and calls SUNDIALS' CVODE (bound by :mod:`._sundials`), which calls back the vector field,
-its Jacobian and the event functions of :mod:`._field` as compiled C callbacks
-(:func:`numba.cfunc`): no Python runs between a flight's start and its end. CVODE's options are
-scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with a direct solver and the
+its Jacobian and the event functions of the code generated for the circuit's network
+(:mod:`._netgen`'s ``CALLBACKS``, :mod:`._endgen`'s) as compiled C callbacks (:func:`numba.cfunc`):
+no Python runs between a flight's start and its end. CVODE's options are scikit-sundae's defaults
+(BDF of orders 1 to 5, Newton's method with a direct solver and the
 analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
 takes the same steps as through scikit-sundae's interface, to the bit (a test); the variational
 flights take the band solver where scikit-sundae's takes the dense one, the same to rounding, its
@@ -26,7 +27,6 @@ import numpy as np
 from numba import types
 
 from ...dynamics.compiled import CACHE
-from . import _field as K
 from . import _sundials as S
 
 if not S.bind():  # pragma: no cover - imported only where available (flight.py)
@@ -63,33 +63,6 @@ _step = _ext("CVode", _c(_p, _d, _p, _p, _c))
 _root_info = _ext("CVodeGetRootInfo", _c(_p, _p))
 
 
-@nb.njit(inline="always")
-def _sizes(par):
-    """``(M, N)``: the bar's mode count plus one and the integrated state's size (``par``'s flags)."""
-    M = int(par[K.NM])
-    n = 2 * M + 4
-    return M, n + K.N_ENERGY + (n * n if par[K.VAR] > 0.5 else 0)
-
-
-@nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
-def _rhs_c(t, y, yp, user_data):
-    """CVODE's ``CVRhsFn``: :func:`._field.rhs` on the vectors' data; ``user_data`` is ``par``."""
-    M, N = _sizes(user_data)
-    par = nb.carray(user_data, K.HEAD + 3 * M)
-    K.rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
-    return 0
-
-
-@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
-def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
-    """CVODE's ``CVLsJacFn``: :func:`._field.jac` into the dense matrix (stored by columns)."""
-    M, N = _sizes(user_data)
-    par = nb.carray(user_data, K.HEAD + 3 * M)
-    JJ = nb.carray(_dense_data(J), (N, N)).T
-    K.jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
-    return 0
-
-
 _LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it is int or int64_t
 
 
@@ -108,20 +81,6 @@ def band_blocks(A, J, N, n_energy):
             col = (base + j) * ldim + smu - j
             for i in range(n):
                 data[col + i] = A[i, j]
-
-
-@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
-def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
-    """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._field.jac` in
-    band storage (half-bandwidths ``n - 1``: ``A`` on the state and on each column of ``Phi``,
-    stored by columns, the energies' rows zero), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
-    M, N = _sizes(user_data)
-    par = nb.carray(user_data, K.HEAD + 3 * M)
-    n = 2 * M + 4
-    A = np.empty((n, n))
-    K.jac_base(nb.carray(_nv_data(y), N), par, M, A)
-    band_blocks(A, J, N, K.N_ENERGY)
-    return 0
 
 
 @nb.njit(cache=CACHE, nogil=True)
@@ -233,15 +192,6 @@ def _block_solve_c(S, A, x, b, tol):
     return 0
 
 
-@nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
-def _events_c(t, y, g, user_data):
-    """CVODE's ``CVRootFn``: :func:`._field.events`."""
-    M, N = _sizes(user_data)
-    par = nb.carray(user_data, K.HEAD + 3 * M)
-    K.events(t, nb.carray(_nv_data(y), N), nb.carray(g, K.N_EVENTS), par)
-    return 0
-
-
 @nb.njit(cache=CACHE, nogil=True)
 def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     """One flight: CVODE from ``y0`` at ``t0`` to its first root (a terminal event in
@@ -257,7 +207,7 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     directions : numpy.ndarray of int32, shape (E,)
         Each event's direction (CVODE's root directions; as many as the workspace's events).
     par : numpy.ndarray
-        The kernels' parameters (:mod:`._field`).
+        The kernels' parameters (:mod:`._bar`, the network after them).
     keep : int
         The leading components kept at each step.
     max_steps : int
@@ -352,19 +302,20 @@ def _free(ctx, mem, y, A, LS):
 
 class Workspace:
     """One CVODE memory for systems of size ``N``: BDF (or, with ``adams``, Adams-Moulton of orders
-    1 to 12), Newton's method with the dense direct solver
-    and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band
-    solver of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
-    factorisation than the dense one), the six event functions :func:`_events_c`, SUNDIALS' error
-    messages silenced (a failure's reason reaches the caller as its return flag). With ``blocks``
-    (the variational flights: the Newton matrix block-diagonal, the state's block repeated for each
+    1 to 12), Newton's method with the dense direct solver or, with ``band`` (the variational flights:
+    ``N = n + n_E + n^2``), the band solver of half-bandwidths ``n - 1`` (``n^2`` times fewer operations
+    a factorisation than the dense one), ``callbacks``, ``(rhs, jac, events, number of events)``, the
+    compiled C callbacks of the vector field, the Jacobian (dense, or in band storage with ``band``:
+    :func:`band_blocks`) and the events (a flight's generated module's, :mod:`._netgen`, or the
+    circuit's during a blow, :mod:`._endgen`), SUNDIALS' error messages silenced (a failure's reason
+    reaches the caller as its return flag). With ``blocks`` (the variational flights: the Newton
+    matrix block-diagonal, the state's block repeated for each
     column of ``Phi``), the band solver's setup and solve are replaced by :func:`_block_setup_c` and
     :func:`_block_solve_c`: one LU of the ``n x n`` block, applied to each block, the band LU's
     operations on each block in its order (the same steps, to the bit) for about ``n`` times fewer
     a factorisation and three times fewer a solve; ``blocks`` says whether they were (the band
     solver's table as SUNDIALS 7 lays it out, checked, else the band solver's own). Freed when
-    collected. ``callbacks``, ``(rhs, jac, events, number of events)``, replace the flight's vector
-    field, dense Jacobian and events (the circuit during a blow: :mod:`._endgen`).
+    collected.
 
     Attributes
     ----------
@@ -372,7 +323,7 @@ class Workspace:
         The addresses :func:`fly` takes.
     """
 
-    def __init__(self, N: int, band: int = 0, callbacks=None, blocks: bool = False, adams: bool = False):
+    def __init__(self, N: int, band: int, callbacks, blocks: bool = False, adams: bool = False):
         f = S.function
         ctx = ctypes.c_void_p()
         if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
@@ -395,8 +346,7 @@ class Workspace:
             if smu != min(N - 1, 2 * band) or f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
                 raise RuntimeError("SUNDIALS' band matrix is not stored as documented")
         self.blocks = bool(blocks and band and _swap_ops(LS, ctx.value))
-        rhs, jac, events, n_events = callbacks or (_rhs_c, _jac_band_c if band else _jac_c, _events_c,
-                                                   K.N_EVENTS)
+        rhs, jac, events, n_events = callbacks
         ok = (f("CVodeInit")(mem, rhs.address, 0.0, y) == 0
               and f("CVodeSStolerances")(mem, 1e-10, 1e-12) == 0
               and f("CVodeSetLinearSolver")(mem, LS, A) == 0
@@ -426,16 +376,15 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def workspace(N: int, band: int = 0, callbacks=None, blocks: bool = False, adams: bool = False) -> Workspace:
+def workspace(N: int, band: int, callbacks, blocks: bool = False, adams: bool = False) -> Workspace:
     """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
     ``band``, or dense for 0; with ``blocks``, its setup and solve on the blocks; with ``adams``,
-    Adams-Moulton's method instead of BDF; :class:`Workspace`),
-    made on first use; ``callbacks``: ``(rhs, jac, events, number of events)`` as compiled C
-    callbacks in place of the flight's (the circuit during a blow: :mod:`._endgen`)."""
+    Adams-Moulton's method instead of BDF; :class:`Workspace`) and the compiled C callbacks
+    ``callbacks``, ``(rhs, jac, events, number of events)``, made on first use."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}
-    key = (N, band, None if callbacks is None else callbacks[0].address, bool(blocks and band), bool(adams))
+    key = (N, band, callbacks[0].address, bool(blocks and band), bool(adams))
     ws = spaces.get(key)
     if ws is None:
         ws = spaces[key] = Workspace(N, band, callbacks, blocks, adams)

@@ -24,11 +24,11 @@ import numpy as np
 
 from ...dynamics.compiled import CACHE
 from . import _cvode as CV  # noqa: F401  (the SUNDIALS libraries bound: a module that imports this flies compiled)
-from . import _endfield as EK
+from . import _endgen as EK
 
 __all__ = ["spline_data", "user_data", "spline_at"]
 
-#: the user data's header: ``len(par)``, then ``ext`` (:mod:`._endfield`: ``a, 1/Z``)
+#: the user data's header: ``len(par)``, then ``ext`` (:mod:`._endgen`: ``a, 1/Z``)
 HD_NPAR, HD_EXT = 0, 1
 _HEAD = HD_EXT + EK.EXT_SIZE
 
@@ -64,12 +64,11 @@ def spline_data(incoming):
     return np.concatenate(blocks), offsets
 
 
-def user_data(par: np.ndarray, a: float, impedance: float, room: int = 0,
-              scratch: int = EK.SCRATCH) -> np.ndarray:
+def user_data(par: np.ndarray, a: float, impedance: float, scratch: int, room: int = 0) -> np.ndarray:
     """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
     ``(3 + len(par) + scratch + room,)``, ``scratch`` the callbacks' room for their intermediate
-    values (the generated module's ``SCRATCH``; the preset's, :data:`._endfield.SCRATCH`, by
-    default), ``room`` that of an interval's spline (the generated ``fly_intervals``)."""
+    values (the generated module's ``SCRATCH``), ``room`` that of an interval's spline (the generated
+    ``fly_intervals``)."""
     head = np.empty(_HEAD)
     head[HD_NPAR], head[HD_EXT + EK.EXT_A], head[HD_EXT + EK.EXT_IZ] = par.size, a, 1.0 / float(impedance)
     return np.concatenate((head, par, np.zeros(scratch + room)))

@@ -3,7 +3,7 @@ r"""The oil circuit as a network of part records, compiled once for every topolo
 Each part of the circuit describes itself as records (:func:`record`): small float arrays of
 :data:`REC_SIZE` slots, the slot ``KIND`` first and the kind's fields at the named offsets below. The
 drive composes them (:func:`compose`) into one array appended to the parameter vector ``par`` of
-:mod:`._field` after the bar's ``HEAD + 3 M`` entries: a header (``NW_*``) and the records, the
+:mod:`._bar` after the bar's ``HEAD + 3 M`` entries: a header (``NW_*``) and the records, the
 nodes first (node ``j`` is record ``j``), then the other parts in the order of their kinds
 (:data:`PUMP`, :data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`), each
 kind in the order given. The code generated for a network's topology (:mod:`._netgen`) reads only
@@ -17,7 +17,7 @@ their own pressure, a tank), the valve's spool and ``K`` energy integrands (each
 to the slots its record names).
 
 Kinds and their equations (``p`` a node's pressure, ``w = -sum_i e_i q_i`` the driven end's
-displacement away from the stop, ``phi`` the smoothed orifice law of :func:`._field.phi`):
+displacement away from the stop, ``phi`` the smoothed orifice law of :func:`.kinds._flow.phi`):
 
 - ``NODE``: a volume ``V`` of oil of bulk modulus ``beta`` (``N_V``, ``N_BETA``); with a chamber on
   it ``p' = beta / V (net)``, ``V = N_V + a w``; else ``p' = net / C``, ``C = V / beta + sum C_a``;
@@ -50,8 +50,9 @@ displacement away from the stop, ``phi`` the smoothed orifice law of :func:`._fi
   (:mod:`.kinds.spool_port`: the spool valve's main ports).
 
 The sums run in the order of the records, from ``-0.0`` (so that a sum's first term is that term,
-sign of a zero included): the preset drifter's records reproduce :mod:`._field`'s arithmetic to the
-bit (``tests/drives/test_circuit_network.py``).
+sign of a zero included): the preset drifter's records reproduce the arithmetic of the preset's
+kernel written by hand (``tests/circuit_field_reference.py``) to the bit
+(``tests/drives/test_circuit_network.py``).
 """
 
 from __future__ import annotations

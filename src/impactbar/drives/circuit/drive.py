@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..base import Drive, DriveState, GapCrossing, SurfaceEvent
-from . import _field as K
+from . import _bar as K
 from . import _network as NW
 from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
@@ -661,7 +661,7 @@ def _rate_model(M: int) -> _RateModel:
 
 @functools.lru_cache(maxsize=64)
 def _par_base(drive: HydraulicCircuitDrive, model) -> np.ndarray:
-    """The parameter vector of the compiled kernels (:mod:`._field`) for a drive and a bar (its
+    """The parameter vector of the compiled kernels (:mod:`._bar`) for a drive and a bar (its
     struck end's weights, squared frequencies and driven end's weights: a stepped piston's too)."""
     M = model.n_modes + 1
     d = float(model.d)

@@ -24,8 +24,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..base import DriveState, FlightSettings
-from . import _endfield as EK
-from ._field import RAMP_EV
+from . import _endgen as EK
+from ._bar import RAMP_EV
 from .flight import _MAX_STEPS, HermiteSteps, _compiled_driver, _message
 from .settings import circuit_settings
 

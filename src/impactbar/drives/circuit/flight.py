@@ -50,8 +50,8 @@ import numpy as np
 
 from ..base import DriveState, FlightSettings
 from ..flight import ARRIVAL, END, EVENT, Flight, ModalEnd
-from . import _field as K
 from . import _magnus
+from ._bar import ARRIVAL_EV
 from .extremes import hermite_extremes
 from .settings import DEFAULT_SETTINGS, CircuitFlightSettings, circuit_settings
 
@@ -141,15 +141,15 @@ class CircuitPiece(HermiteSteps, ModalEnd):
     layout : CircuitLayout
         Where the circuit keeps its states and energy terms (:attr:`HydraulicCircuitDrive.layout`).
     f : numpy.ndarray, shape (S, 2 N + 2 + n_states + n_energy)
-        The vector field at the steps, ``field_at(y, par, f)`` (a compiled ``field_at``: the code
-        generated for the circuit's topology, :mod:`._netgen`, or by default
-        :func:`._field.field_at`), evaluated on first use (a flight whose end alone is wanted, as
+        The vector field at the steps, ``field_at(y, par, f)`` (the compiled ``field_at`` of the
+        flight's kernels: the code generated for the circuit's topology, :mod:`._netgen`), evaluated
+        on first use (a flight whose end alone is wanted, as
         Newton's residuals, never needs it).
     """
 
     __slots__ = ("M", "c", "alpha", "layout", "_f", "_par", "_field_at")
 
-    def __init__(self, t, y, par, M, c, alpha, layout, field_at=None):
+    def __init__(self, t, y, par, M, c, alpha, layout, field_at):
         self.t, self.y = t, y
         self.t0, self.t_end = float(t[0]), float(t[-1])
         self.M, self.c, self.alpha, self.layout = M, c, alpha, layout
@@ -160,8 +160,8 @@ class CircuitPiece(HermiteSteps, ModalEnd):
     def f(self) -> np.ndarray:
         """The vector field at the steps (class docstring)."""
         if self._f is None:
-            f, field_at = np.empty_like(self.y), K.field_at if self._field_at is None else self._field_at
-            field_at(np.ascontiguousarray(self.y), self._par, f)
+            f = np.empty_like(self.y)
+            self._field_at(np.ascontiguousarray(self.y), self._par, f)
             self._f, self._par, self._field_at = f, None, None
         return self._f
 
@@ -344,7 +344,8 @@ def keep_spacing(drive, model, rtol: float = KEEP_RTOL) -> float:
 def uses_magnus(sensitivity: str, model, generated: bool = True) -> bool:
     """Whether a variational flight of the piston of ``model`` takes its fundamental matrix by
     Magnus' method over the steps of a plain flight (:attr:`CircuitFlightSettings.sensitivity
-    <.settings.CircuitFlightSettings.sensitivity>`)."""
+    <.settings.CircuitFlightSettings.sensitivity>`), with the code generated for the network
+    (``generated``: a flight's own ``kernels`` are flown by CVODE alone, :func:`circuit_flight`)."""
     return generated and (sensitivity == "magnus" or (sensitivity == "auto" and model.n_modes > 0))
 
 
@@ -396,14 +397,11 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
     solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``adams``: Adams-Moulton's
     method, else BDF; ``n_energy`` the energy integrands after the ``n`` states; ``code``: the
-    generated module whose C callbacks CVODE calls, :mod:`._netgen`, or None for :mod:`._cvode`'s
-    own)."""
+    flight's kernels, whose C callbacks CVODE calls: the generated module, :mod:`._netgen`)."""
     n = keep - n_energy
     var = band and y0.size > keep  # variational: the band solver
-    callbacks = None
-    if code is not None:
-        rhs, jac, jac_band, events, n_events = code.CALLBACKS
-        callbacks = (rhs, jac_band if var else jac, events, n_events)
+    rhs, jac, jac_band, events, n_events = code.CALLBACKS
+    callbacks = (rhs, jac_band if var else jac, events, n_events)
     ws = cv.workspace(y0.size, n - 1 if var else 0, callbacks, blocks and var, adams)
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
@@ -449,6 +447,8 @@ def uses_dop853(multistep: str, drive, model, generated: bool = True) -> bool:
     drive : HydraulicCircuitDrive
     model : BarModel
     generated : bool, optional
+        Whether the flight runs the code generated for the network (:func:`circuit_flight` without
+        ``kernels``).
 
     Returns
     -------
@@ -461,7 +461,7 @@ def uses_dop853(multistep: str, drive, model, generated: bool = True) -> bool:
     """
     if multistep == "dop853":
         if not generated:
-            raise ValueError("multistep='dop853' runs on the code generated for the network (generated=True)")
+            raise ValueError("multistep='dop853' runs on the code generated for the network (kernels=None)")
         return True
     return multistep == "auto" and generated and model.n_modes > 0 and \
         stiffness_ratio(drive, model) <= EXPLICIT_STIFFNESS
@@ -471,9 +471,7 @@ def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep)
     """The same through scikit-sundae's ``CVODE`` (its Python interface)."""
     from sksundae.cvode import CVODE
 
-    rhs, jac, events = K.rhs, K.jac, K.events
-    if code is not None:
-        rhs, jac, events = code.flight_rhs, code.flight_jac, code.flight_events
+    rhs, jac, events = code.flight_rhs, code.flight_jac, code.flight_events
     n_events = len(directions)
 
     def f(t, y, yp):
@@ -500,7 +498,7 @@ def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep)
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
-                   generated: bool = True, start=None) -> Flight:
+                   kernels=None, start=None) -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
@@ -529,7 +527,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
           to the bit; :class:`._cvode.Workspace`); ``False``: the band solver's own (the way before).
         - ``sensitivity``: how a variational flight's fundamental matrix is taken: ``"magnus"``, the
           plain flight integrated and ``Phi`` over its steps by Magnus' method of order 6
-          (:mod:`._magnus`, with ``generated`` only); ``"cvode"``, the variational equations
+          (:mod:`._magnus`, without ``kernels`` only); ``"cvode"``, the variational equations
           integrated beside the state by CVODE (:math:`n^2` more unknowns); ``"auto"`` (default),
           Magnus where the piston has modes and CVODE for the rigid piston (whose six unknowns CVODE
           takes cheaply, to the drive's tolerance). The flight's states are the plain flight's either
@@ -543,20 +541,24 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
           ``"dop853"``, the explicit Dormand-Prince 8(5,3) compiled with the generated code for every
           plain flight (:mod:`._dop853`: scipy's method and step control, at
           :data:`EXPLICIT_TOLERANCE` times the tolerances of ``settings``, the events found on its
-          dense output, its kept points at most :func:`keep_spacing` apart; ``ValueError`` without
-          ``generated``); ``"auto"`` (default), for the plain flights of a piston with modes (those of
+          dense output, its kept points at most :func:`keep_spacing` apart; ``ValueError`` with
+          ``kernels``); ``"auto"`` (default), for the plain flights of a piston with modes (those of
           a variational flight by Magnus among them) DOP853 where the oil is not stiff against its
           steps (:func:`stiffness_ratio` at most :data:`EXPLICIT_STIFFNESS`), else Adams-Moulton
           where the oil is not much stiffer than the modes (at most :data:`ADAMS_STIFFNESS`), BDF for
           the rest, the rigid piston and CVODE's variational flights (which ``"dop853"`` leaves to
           these CVODE methods too; module docstring); ``"cvode"``, ``"auto"``'s choice among CVODE's
           methods only, no DOP853 (the way before it, the baseline).
-    generated : bool, optional
-        The vector field, its Jacobian, the events and CVODE's C callbacks of the code generated for
-        the circuit's network of part records (:meth:`HydraulicCircuitDrive._compiled_network`,
-        :mod:`._netgen`: one module per topology, the values read from ``par`` with the network after
-        the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._field`,
-        :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
+    kernels : types.SimpleNamespace or None, optional
+        The compiled kernels the flight runs. ``None`` (default): the vector field, its Jacobian, the
+        events and CVODE's C callbacks of the code generated for the circuit's network of part
+        records (:meth:`HydraulicCircuitDrive._compiled_network`, :mod:`._netgen`: one module per
+        topology, the values read from ``par`` with the network after the bar's entries). Else a
+        namespace with a generated module's names ``flight_rhs``, ``flight_jac``, ``flight_events``,
+        ``field_at`` and ``CALLBACKS`` (``None`` where SUNDIALS is not driven from compiled code),
+        their ``par`` the drive's alone (:mod:`._bar`, no network after it): a reference to check the
+        generated code against (the tests' hand-written preset circuit takes the same steps, to the
+        bit), flown by CVODE only (neither Magnus' method nor DOP853).
     start : numpy.ndarray or None, optional
         With ``variational``, the fundamental matrix at the flight's start (shape ``(n, n)``; default
         the identity): the flight's ``sensitivity`` is then the matrix carried to its end
@@ -573,7 +575,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     ------
     ValueError
         Where CVODE or DOP853 fails (the message says why: a chamber emptied, a pressure out of
-        range); ``multistep="dop853"`` without ``generated``.
+        range); ``multistep="dop853"`` with ``kernels``.
     """
     settings = circuit_settings(settings)
     compiled, band, blocks = settings.compiled, settings.band, settings.blocks
@@ -582,6 +584,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     M = q.size
+    generated = kernels is None
     magnus = variational and uses_magnus(sensitivity, model, generated)
     if magnus:  # the plain flight, its state as accurate as the variational flight's, then Phi over its steps
         variational = False
@@ -589,10 +592,11 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     L = drive.layout
     n, n_energy = L.size(M), L.n_energy
     par = drive._par(model, mode, variational)
-    code = field_at = None
+    code = kernels
     if generated:
         net, code = drive._compiled_network(mode)
-        par, field_at = np.concatenate((par, net)), code.field_at
+        par = np.concatenate((par, net))
+    field_at = code.field_at
     y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
     if variational:
         y0 = np.concatenate((y0, (np.eye(n) if start is None else start).T.ravel()))
@@ -639,7 +643,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         if start is not None:
             Phi = Phi @ start
     if status == 2:
-        if K.ARRIVAL_EV in hit:
+        if ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
             return Flight(te, qe, ve, ze, ARRIVAL, (), piece, Phi)
         fired = drive._fired(mode, hit)

@@ -1,6 +1,6 @@
 r"""Where the oil circuit keeps each of its states and energy terms (theory §11): the layout that the
 Python side reads by name (:attr:`HydraulicCircuitDrive.layout
-<impactbar.drives.circuit.HydraulicCircuitDrive.layout>`), the compiled kernels (:mod:`._field`) by
+<impactbar.drives.circuit.HydraulicCircuitDrive.layout>`), the compiled kernels (:mod:`._netgen`) by
 number.
 
 The integrated state of a flight is ``(q, q', z, E)``: the bar's ``M`` modal coordinates and their
@@ -136,8 +136,8 @@ class CircuitLayout:
         return 2 * M + self.n_states
 
 
-#: The preset circuit's layout (that of the compiled kernel :mod:`._field`): ``z = (p_f, p_r, p_s,
-#: x_v)``, the energy integrands of :class:`~impactbar.drives.circuit.CircuitEnergy` (the compression
-#: work split by volume: ``front``, ``rear``, ``supply``).
+#: The preset circuit's layout (that of its network's generated kernel, :mod:`._netgen`): ``z = (p_f,
+#: p_r, p_s, x_v)``, the energy integrands of :class:`~impactbar.drives.circuit.CircuitEnergy` (the
+#: compression work split by volume: ``front``, ``rear``, ``supply``).
 PRESET = CircuitLayout(states=("front", "rear", "supply", "spool"), state_names=("p_f", "p_r", "p_s", "x_v"),
                        energies=("pump", "piston", "orifices", "tank", "front", "rear", "supply", "gas"))

@@ -21,7 +21,7 @@ __all__ = ["part_flows"]
 
 
 def _phi(dp, ptr2):
-    """The orifice law :func:`._field.phi` on arrays."""
+    """The orifice law :func:`.kinds._flow.phi` on arrays."""
     return dp * (dp * dp + ptr2) ** -0.25
 
 

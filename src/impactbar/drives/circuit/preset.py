@@ -17,7 +17,8 @@ In that order they number the preset's layout (:data:`~impactbar.drives.circuit.
 the states ``p_f, p_r, p_s, x_v``, the tank node 3, the integrands ``pump``, ``piston``,
 ``orifices``, ``tank`` of :data:`~impactbar.drives.circuit.composition.SHARED_ENERGIES` then
 ``front``, ``rear``, ``supply``, ``gas``; the events' slots 0, 1, 2) and write the network the
-compiled kernel (:mod:`._field`) describes, record for record. An extra part whose
+kernel written by hand describes (the tests' reference, ``tests/circuit_field_reference.py``),
+record for record. An extra part whose
 :attr:`~impactbar.drives.circuit.CircuitPart.replaces` names one of them takes its place.
 """
 

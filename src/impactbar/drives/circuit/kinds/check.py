@@ -13,8 +13,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._field import dphi, phi
-from ._flow import COEFFICIENT, INTERCEPT, JIT, PTR2, SLOPE
+from ._flow import COEFFICIENT, INTERCEPT, JIT, PTR2, SLOPE, dphi, phi
 from .cushion import ENERGIES as ENERGIES  # (a cushion's record and slots)
 from .cushion import EVENTS as EVENTS
 from .cushion import FIELDS as FIELDS

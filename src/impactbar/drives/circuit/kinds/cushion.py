@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._field import dphi, phi
-from ._flow import COEFFICIENT, ENERGY, INTERCEPT, JIT, PIECEWISE, PTR2, SLOPE, SOURCE, TARGET
+from ._flow import COEFFICIENT, ENERGY, INTERCEPT, JIT, PIECEWISE, PTR2, SLOPE, SOURCE, TARGET, dphi, phi
 
 CODE = 8
 NAME = "cushion"

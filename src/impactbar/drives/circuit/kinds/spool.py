@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._field import _off_level
 from ._flow import JIT
+from .level import _off_level
 
 CODE = 11
 NAME = "spool"

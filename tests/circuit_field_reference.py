@@ -1,63 +1,63 @@
-r"""The oil circuit's vector field, its Jacobian and its event functions, compiled with numba
-(theory §11). Plain arrays only: what SUNDIALS' CVODE calls at every step (as C callbacks,
-:mod:`._cvode`, or through scikit-sundae's interface).
+r"""The preset circuit's vector field, its Jacobian and its event functions written by hand (theory
+§11): the tests' reference for the code the library generates for the preset drifter's network
+(``impactbar.drives.circuit._netgen``), which must give the same numbers to the bit, and a flight's
+kernels for ``circuit_flight(..., kernels=KERNELS)`` (CVODE's C callbacks included where SUNDIALS is
+driven from compiled code), which must take the same steps as the generated code's.
 
 The integrated state is ``Y = (q_0..q_N, q_0'..q_N', p_f, p_r, p_s, x_v, E_0..E_7[, Phi])``: the bar's
 modes (eq. 6), the circuit's state, eight energy quadratures (the terms of the account of theory
 §11: pump work, work on the piston, orifice losses, energy to the tank, the compression work of the
 front, rear and supply volumes, the accumulator's gas) and, for the variational equations, the
-fundamental matrix ``Phi`` of the first ``n = 2 N + 6`` components, stored by columns (column ``j`` at
-``n + 8 + j n``: each column's equations couple only its own ``n`` components, so that the Newton
-matrix is banded, of half-bandwidth ``n - 1``), ``Phi' = A Phi`` with ``A`` the Jacobian of the vector
-field.
-
-``par`` holds the parameters and the mode (indices below); the callers write the mode's flags
-before each flight.
+fundamental matrix ``Phi`` of the first ``n = 2 N + 6`` components, stored by columns
+(``impactbar.drives.circuit._bar``). ``par`` is the drive's (``HydraulicCircuitDrive._par``), its
+indices those of ``_bar``, without the network after it.
 """
 
-from __future__ import annotations
+from types import SimpleNamespace
 
 import numba as nb
 import numpy as np
 
-from ...dynamics.compiled import CACHE
+from impactbar.drives.circuit._bar import (
+    ACC,
+    ALPHA,
+    BETA,
+    DAMP,
+    HASACC,
+    HASREL,
+    HEAD,
+    HELD,
+    KF,
+    KREL,
+    KV,
+    N_ENERGY,
+    N_EVENTS,
+    NM,
+    NPOL,
+    NU0,
+    NUF,
+    NUR,
+    NUS,
+    OPEN,
+    P0,
+    PREL,
+    PT,
+    PTR2,
+    QP,
+    RAMP_EV,
+    REL,
+    VAR,
+    XRATE,
+    bar_events,
+    end_motion,
+    jac_blocks,
+    phi_rate,
+)
+from impactbar.drives.circuit.kinds._flow import dphi, phi
+from impactbar.drives.circuit.kinds.level import _off_level
+from impactbar.dynamics.compiled import CACHE
 
-# parameter indices in ``par``
-ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
-HELD, PSH, XOUT, XIN, ACC, REL, XRATE, ARMO, ARMI, DAMP, NM, OPEN, VAR, HASREL, HASACC = range(15, 30)
-HEAD = 30  # then the struck end's weights (M), the squared frequencies (M) and the driven end's (M)
-
-N_ENERGY = 8
-N_EVENTS = 6
-ARRIVAL_EV, OUT_EV, IN_EV, RAMP_EV, ACC_EV, REL_EV = range(N_EVENTS)
-
-_JIT = dict(cache=CACHE, nogil=True, error_model="numpy")  # (in memory where no cache is writable)
-
-
-@nb.njit(**_JIT)
-def phi(dp, ptr2):
-    """The smoothed turbulent orifice law ``dp (dp^2 + p_tr^2)^(-1/4)``."""
-    return dp * (dp * dp + ptr2) ** -0.25
-
-
-@nb.njit(**_JIT)
-def dphi(dp, ptr2):
-    """``phi'(dp)``."""
-    s = dp * dp + ptr2
-    return s ** -0.25 - 0.5 * dp * dp * s ** -1.25
-
-
-@nb.njit(**_JIT)
-def end_motion(y, par, M):
-    """The piston's driven end at ``y``: its displacement ``w`` away from where it is on the stop and
-    its rate ``w'``, ``-sum e_i q_i`` and ``-sum e_i q_i'`` with the driven end's weights ``e``."""
-    w = 0.0
-    wd = 0.0
-    for i in range(M):
-        e = par[HEAD + 2 * M + i]
-        w -= e * y[i]
-        wd -= e * y[M + i]
-    return w, wd
+_JIT = dict(cache=CACHE, nogil=True, error_model="numpy")
 
 
 @nb.njit(**_JIT)
@@ -173,43 +173,6 @@ def rhs(t, y, yp, par):
 
 
 @nb.njit(**_JIT)
-def phi_rate(A, y, yp, off):
-    """``Phi' = A Phi`` into ``yp`` from ``Phi`` in ``y``, stored by columns from ``off`` (``n`` the
-    order of ``A``)."""
-    n = A.shape[0]
-    # A's nonzeros by rows (some 9 M + 10 of n^2), each row's in increasing column, and Phi by
-    # rows: each entry of A Phi is the sum over the row's nonzeros, from 0 in increasing column (its
-    # zeros skipped), the sums of n entries side by side (each row's contiguous)
-    cols = np.empty(n * n, np.int64)
-    vals = np.empty(n * n)
-    rows = np.empty(n + 1, np.int64)
-    nz = 0
-    for i in range(n):
-        rows[i] = nz
-        for k in range(n):
-            a = A[i, k]
-            if a != 0.0:
-                cols[nz] = k
-                vals[nz] = a
-                nz += 1
-    rows[n] = nz
-    P = np.empty((n, n))
-    for j in range(n):  # column j of Phi at off + j n
-        for k in range(n):
-            P[k, j] = y[off + j * n + k]
-    out = np.zeros((n, n))
-    for i in range(n):
-        for p in range(rows[i], rows[i + 1]):
-            a = vals[p]
-            k = cols[p]
-            for j in range(n):
-                out[i, j] += a * P[k, j]
-    for j in range(n):
-        for i in range(n):
-            yp[off + j * n + i] = out[i, j]
-
-
-@nb.njit(**_JIT)
 def jac(t, y, yp, JJ, par):
     """CVODE's Jacobian of :func:`rhs` for its Newton iteration: ``A`` on the circuit and the bar,
     ``A`` on each column of ``Phi`` (the term in ``dA/dy Phi`` left out: the iteration matrix need
@@ -219,26 +182,6 @@ def jac(t, y, yp, JJ, par):
     A = np.empty((n, n))
     jac_base(y, par, M, A)
     jac_blocks(A, JJ, n + N_ENERGY if par[VAR] > 0.5 else -1)
-
-
-@nb.njit(**_JIT)
-def jac_blocks(A, JJ, off):
-    """``JJ`` zero but ``A`` in its leading block and, where ``off >= 0``, into the block of each column of
-    ``Phi`` (stored by columns from ``off``)."""
-    N = JJ.shape[0]
-    for i in range(N):
-        for j in range(N):
-            JJ[i, j] = 0.0
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(n):
-            JJ[i, j] = A[i, j]
-    if off >= 0:
-        for col in range(n):  # Phi[:, col] at off + col n
-            c = off + col * n
-            for i in range(n):
-                for k in range(n):
-                    JJ[c + i, c + k] = A[i, k]
 
 
 @nb.njit(**_JIT)
@@ -253,23 +196,11 @@ def events(t, y, g, par):
 
 
 @nb.njit(**_JIT)
-def bar_events(y, par, M, g):
-    """The bar's and the valve's switches' event functions into ``g[:RAMP_EV]``: the arrival at the
-    stop ``c . q``, the gap through ``switch_out`` and ``switch_in`` (where armed, else 1)."""
-    s = 0.0
-    for i in range(M):
-        s += par[HEAD + i] * y[i]
-    g[ARRIVAL_EV] = s
-    g[OUT_EV] = -y[0] - par[XOUT] if par[ARMO] > 0.5 else 1.0
-    g[IN_EV] = -y[0] - par[XIN] if par[ARMI] > 0.5 else 1.0
-
-
-@nb.njit(**_JIT)
 def circuit_events(xv, ps, par, g, first):
     """The circuit's own event functions into ``g[first:first + 3]``, from the spool's position
     ``xv`` and the supply pressure ``ps`` (inactive ones held at 1): the ramp's end, the supply
     through the pre-charge and through the relief pressure (each pressure's :func:`_off_level`);
-    the flights' (:func:`events`) and the blows' (``_endfield.events``)."""
+    the flights' (:func:`events`) and the blows' (``circuit_blow_reference.events``)."""
     if par[OPEN] > 0.5:
         g[first] = xv - 1.0
     elif par[OPEN] < -0.5:
@@ -278,23 +209,6 @@ def circuit_events(xv, ps, par, g, first):
         g[first] = 1.0
     g[first + 1] = _off_level(ps - par[P0], par[ACC], par[P0]) if par[HASACC] > 0.5 else 1.0
     g[first + 2] = _off_level(ps - par[PREL], par[REL], par[PREL]) if par[HASREL] > 0.5 else 1.0
-
-
-@nb.njit(**_JIT)
-def _off_level(g, above, level):
-    """An event function ``p - level`` exactly 0 moved by one unit in the last place of ``level`` to
-    the side the mode's flag says the pressure is on (``above`` 1: at or above the level, watched
-    for falling through it): the level is crossed where the pressure passes it, not where it
-    touches it. A flight starts on the level where its event ended the last flight, and over the
-    first steps the pressure's change can be below the rounding of the level: CVODE leaves an event
-    function that is 0 at the start unwatched until it moves off 0 (a pressure that turns back
-    through the level at once was missed, and CVODE warned that a root function stayed identically
-    0), and takes a 0 after a step for a root (the accumulator would empty at once where the pump
-    fills it)."""
-    if g != 0.0:
-        return g
-    u = np.spacing(abs(level))
-    return u if above > 0.5 else -u
 
 
 @nb.njit(**_JIT)
@@ -308,3 +222,61 @@ def field_at(ys, par, out):
         _base(ys[r], par, M, buf)
         for j in range(n + N_ENERGY):
             out[r, j] = buf[j]
+
+
+def _callbacks():
+    """CVODE's C callbacks of :func:`rhs`, :func:`jac` (dense, and in band storage for the variational
+    flights) and :func:`events` (``user_data`` is ``par``), as the generated module's ``CALLBACKS``:
+    ``(rhs, jac, jac_band, events, number of events)``; ``None`` where SUNDIALS is not driven from
+    compiled code."""
+    try:
+        from impactbar.drives.circuit import _cvode as CV
+    except ImportError:
+        return None
+    _c, _d, _p, _dp = CV._c, CV._d, CV._p, CV._dp
+    _nv_data, _dense_data, band_blocks = CV._nv_data, CV._dense_data, CV.band_blocks
+
+    @nb.njit(inline="always")
+    def _sizes(par):
+        M = int(par[NM])
+        n = 2 * M + 4
+        return M, n + N_ENERGY + (n * n if par[VAR] > 0.5 else 0)
+
+    @nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
+    def rhs_c(t, y, yp, user_data):
+        M, N = _sizes(user_data)
+        par = nb.carray(user_data, HEAD + 3 * M)
+        rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
+        return 0
+
+    @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
+    def jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
+        M, N = _sizes(user_data)
+        par = nb.carray(user_data, HEAD + 3 * M)
+        JJ = nb.carray(_dense_data(J), (N, N)).T
+        jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
+        return 0
+
+    @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
+    def jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
+        M, N = _sizes(user_data)
+        par = nb.carray(user_data, HEAD + 3 * M)
+        n = 2 * M + 4
+        A = np.empty((n, n))
+        jac_base(nb.carray(_nv_data(y), N), par, M, A)
+        band_blocks(A, J, N, N_ENERGY)
+        return 0
+
+    @nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
+    def events_c(t, y, g, user_data):
+        M, N = _sizes(user_data)
+        par = nb.carray(user_data, HEAD + 3 * M)
+        events(t, nb.carray(_nv_data(y), N), nb.carray(g, N_EVENTS), par)
+        return 0
+
+    return rhs_c, jac_c, jac_band_c, events_c, N_EVENTS
+
+
+#: the hand-written kernels as ``circuit_flight``'s ``kernels`` (the names of a generated module's)
+KERNELS = SimpleNamespace(flight_rhs=rhs, flight_jac=jac, flight_events=events, field_at=field_at,
+                          jac_base=jac_base, CALLBACKS=_callbacks(), network=False)

@@ -1,0 +1,122 @@
+r"""The bar's share of the circuit's compiled kernels (theory §11): the layout of the parameter vector
+``par`` the drive writes (:meth:`HydraulicCircuitDrive._par <.drive.HydraulicCircuitDrive>`), the
+piston's driven end and the bar's events, and the assembly of the variational equations, which the
+code generated for every network's topology (:mod:`._netgen`, :mod:`._endgen`) calls.
+
+The integrated state of a flight is ``Y = (q_0..q_N, q_0'..q_N', z, E[, Phi])``: the bar's modes
+(eq. 6), the circuit's states ``z`` (its nodes' pressures, then the spool's opening), the energy
+quadratures and, for the variational equations, the fundamental matrix ``Phi`` of the first ``n``
+components, stored by columns (column ``j`` at ``n + n_E + j n``: each column's equations couple only
+its own ``n`` components, so that the Newton matrix is banded, of half-bandwidth ``n - 1``),
+``Phi' = A Phi`` with ``A`` the Jacobian of the vector field.
+
+``par`` holds the drive's scalars and the mode's flags (indices below), then from :data:`HEAD` the
+struck end's weights, the squared frequencies and the driven end's weights (``M`` each), then the
+circuit's network of part records (:mod:`._network`).
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from ...dynamics.compiled import CACHE
+
+__all__ = ["end_motion", "bar_events", "phi_rate", "jac_blocks"]
+
+# parameter indices in ``par``: the preset's scalars, then the mode's flags and the bar's
+ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
+HELD, PSH, XOUT, XIN, ACC, REL, XRATE, ARMO, ARMI, DAMP, NM, OPEN, VAR, HASREL, HASACC = range(15, 30)
+HEAD = 30  # then the struck end's weights (M), the squared frequencies (M) and the driven end's (M)
+
+#: the preset circuit's energy quadratures and its flight's events (the bar's three, then the
+#: circuit's from :data:`RAMP_EV`)
+N_ENERGY = 8
+N_EVENTS = 6
+ARRIVAL_EV, OUT_EV, IN_EV, RAMP_EV, ACC_EV, REL_EV = range(N_EVENTS)
+
+_JIT = dict(cache=CACHE, nogil=True, error_model="numpy")  # (in memory where no cache is writable)
+
+
+@nb.njit(**_JIT)
+def end_motion(y, par, M):
+    """The piston's driven end at ``y``: its displacement ``w`` away from where it is on the stop and
+    its rate ``w'``, ``-sum e_i q_i`` and ``-sum e_i q_i'`` with the driven end's weights ``e``."""
+    w = 0.0
+    wd = 0.0
+    for i in range(M):
+        e = par[HEAD + 2 * M + i]
+        w -= e * y[i]
+        wd -= e * y[M + i]
+    return w, wd
+
+
+@nb.njit(**_JIT)
+def phi_rate(A, y, yp, off):
+    """``Phi' = A Phi`` into ``yp`` from ``Phi`` in ``y``, stored by columns from ``off`` (``n`` the
+    order of ``A``)."""
+    n = A.shape[0]
+    # A's nonzeros by rows (some 9 M + 10 of n^2), each row's in increasing column, and Phi by
+    # rows: each entry of A Phi is the sum over the row's nonzeros, from 0 in increasing column (its
+    # zeros skipped), the sums of n entries side by side (each row's contiguous)
+    cols = np.empty(n * n, np.int64)
+    vals = np.empty(n * n)
+    rows = np.empty(n + 1, np.int64)
+    nz = 0
+    for i in range(n):
+        rows[i] = nz
+        for k in range(n):
+            a = A[i, k]
+            if a != 0.0:
+                cols[nz] = k
+                vals[nz] = a
+                nz += 1
+    rows[n] = nz
+    P = np.empty((n, n))
+    for j in range(n):  # column j of Phi at off + j n
+        for k in range(n):
+            P[k, j] = y[off + j * n + k]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for p in range(rows[i], rows[i + 1]):
+            a = vals[p]
+            k = cols[p]
+            for j in range(n):
+                out[i, j] += a * P[k, j]
+    for j in range(n):
+        for i in range(n):
+            yp[off + j * n + i] = out[i, j]
+
+
+@nb.njit(**_JIT)
+def jac_blocks(A, JJ, off):
+    """``JJ`` zero but ``A`` in its leading block and, where ``off >= 0``, into the block of each column of
+    ``Phi`` (stored by columns from ``off``): CVODE's Jacobian for its Newton iteration, the term in
+    ``dA/dy Phi`` left out (the iteration matrix need not be exact), zero rows for the energy
+    quadratures (they feed nothing back)."""
+    N = JJ.shape[0]
+    for i in range(N):
+        for j in range(N):
+            JJ[i, j] = 0.0
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            JJ[i, j] = A[i, j]
+    if off >= 0:
+        for col in range(n):  # Phi[:, col] at off + col n
+            c = off + col * n
+            for i in range(n):
+                for k in range(n):
+                    JJ[c + i, c + k] = A[i, k]
+
+
+@nb.njit(**_JIT)
+def bar_events(y, par, M, g):
+    """The bar's and the valve's switches' event functions into ``g[:RAMP_EV]``: the arrival at the
+    stop ``c . q``, the gap through ``switch_out`` and ``switch_in`` (where armed, else 1)."""
+    s = 0.0
+    for i in range(M):
+        s += par[HEAD + i] * y[i]
+    g[ARRIVAL_EV] = s
+    g[OUT_EV] = -y[0] - par[XOUT] if par[ARMO] > 0.5 else 1.0
+    g[IN_EV] = -y[0] - par[XIN] if par[ARMI] > 0.5 else 1.0
