@@ -5,7 +5,7 @@ Between its switches the blow is linear in its data: the junctions and the pisto
 algebraic, the free ends reflect, the bit obeys a linear equation on each branch of the rock. So the
 derivative of every wave along a direction of the data (the piston's modal state at impact, the
 drive) is the same chain run on the direction's waves with the switches held where the blow put
-them (the schedule the primal run logs, :data:`~impactbar.laws.rodrock._exactloop.LOG_SEP` ...),
+them (the schedule the primal run logs, :data:`~impactbar.laws.rodrock._exactnode.LOG_SEP` ...),
 plus what moving a switch moves:
 
 - a switch across which every node's law is continuous moves nothing to first order: the piston
@@ -48,19 +48,10 @@ import numba
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
-from ._exactloop import (
-    LOG_BIT,
-    LOG_SEP,
-    _emit,
-    _load,
-    bit_input,
-    bit_solve,
-    contact_emit,
-    contact_node,
-    node_end,
-    node_junction,
-)
+from ._exactbit import bit_input, bit_solve
+from ._exactloop import contact_emit, contact_node, node_end, node_junction
 from ._exactmodal import piston_integrals
+from ._exactnode import LOG_BIT, LOG_SEP, _emit, _load
 from ._exactpieces import (
     ELASTIC,
     FREE,
