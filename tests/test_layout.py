@@ -78,8 +78,9 @@ def test_tests_mirror_the_package():
     assert len(folders) >= 6
 
 
-#: at most this many modules of the package may have :data:`LONG_MODULE` lines or more (none over 800)
-MAX_LONG_MODULES = 2
+#: at most this many modules of the package may have :data:`LONG_MODULE` lines or more (none over 800):
+#: none, a module within 50 lines of the cap is split by its concepts, not trimmed to fit
+MAX_LONG_MODULES = 0
 LONG_MODULE = 750
 
 
