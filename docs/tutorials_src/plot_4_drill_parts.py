@@ -83,8 +83,9 @@ print(f"the cushion's node peaks at {h['p_cushion_Pa'].max() / 1e6:.2f} MPa, the
 # ----------------------------------------
 # The map of 15 x 15 operating points over ``parts.cushion.volume`` and ``parts.cushion.coefficient``
 # was computed on a local dask cluster by ``benchmarks/make_drill_cushion_map.py`` (a
-# :class:`~impactbar.sweeps.SweepSpec` with a ``config`` run by :func:`~impactbar.sweeps.run_map`, as ``impactbar
-# sweep`` runs a design map) and stored as ``docs/data/drill_cushion_map.csv``; here it is read back.
+# :class:`~impactbar.sweeps.SweepSpec` with a ``config`` run by :func:`~impactbar.sweeps.run_map`,
+# as ``impactbar sweep`` runs a design map) and stored as ``docs/data/drill_cushion_map.csv``; here
+# it is read back.
 # The filled contours are the impact power, the lines the blow frequency.
 import csv
 
