@@ -716,6 +716,7 @@ NOT_COLUMN_RECORDS = {
     "laws/wave/_jumps.py": {"z": COEFFS},
     "laws/wave/_separation.py": {"fq": ONE_TIME, "fv": ONE_TIME},
     "laws/wave/_window.py": {"ic_": COEFFS},
+    "laws/wave/impact.py": {"g": RIGID, "sa": RIGID, "sb": RIGID},
     "laws/wave/law.py": {"jac": MATRIX},
     "laws/wave/periodic.py": {"U": MATRIX, "V": MATRIX, "fq": RIGID, "q": ONE_TIME, "v": ONE_TIME,
                               "y_end": RIGID, "y_minus": RIGID},

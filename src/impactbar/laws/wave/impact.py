@@ -153,11 +153,13 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
         drives = [window_drive(s, R, n_modes, load, float(t)) for t in t0s]
         return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
                 np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
-    view, rate, none = tuple(own.kernel.view), _WindowLoad(load, s, float(t0s[0])).rate, np.empty(0)
+    first, *_ = t0s.tolist()  # (the load's rate does not depend on the start)
+    view, rate, none = tuple(own.kernel.view), _WindowLoad(load, s, first).rate, np.empty(0)
     mc, ms = np.empty((t0s.size, 2, n_modes + 1)), np.empty((t0s.size, 2, n_modes + 1))
     for i, t0 in enumerate(t0s.tolist()):
         mc[i], ms[i] = _kernel_moments(view, s, rate, t0, none, n_modes + 1)
-    return _drive_parts(s, R, math.pi * np.arange(n_modes + 1), mc[:, 0], mc[:, 1], ms[:, 0], ms[:, 1])
+    (ca, cb), (sa, sb) = np.moveaxis(mc, 1, 0), np.moveaxis(ms, 1, 0)  # by the moments' order, start by start
+    return _drive_parts(s, R, math.pi * np.arange(n_modes + 1), ca, cb, sa, sb)
 
 
 def _unit_moment(w):
