@@ -169,3 +169,32 @@ def test_a_machine_that_never_strikes_settles_in_bounded_runs():
     motion = settle_point(_Stalled(), 40)
     assert (motion["n_blows"], motion["n_impacts"], motion["settled"]) == (0, 0, False)
     assert motion["simulated_time"] == 16 * first
+
+
+class _Rising(_Stalled):
+    """A machine whose blows come at 50 Hz, each 0.2 % faster than the one before: a drift that does
+    not slow, never settled however long it runs."""
+
+    def simulate(self, duration_s):
+        self.runs.append(duration_s)
+        n = int(duration_s * 50.0)
+        trajectory = type("Run", (), {"impact_times": (1 + np.arange(n)) / 50.0,
+                                      "impact_velocities": 1.002 ** np.arange(n)})()
+        return trajectory, None
+
+
+def test_a_settle_not_settled_runs_again_to_its_most_blows_and_refuses_bad_bounds():
+    """Not settled in 40 blows (each within 1 % of the one before, but rising), it runs from rest
+    again for SETTLE_GROWTH times more, at the rate seen (50 Hz), up to most_blows: 160 blows."""
+    from impactbar.physical.settle import SETTLE_FIRST_HZ, SETTLE_GROWTH, settle_point, settle_run
+
+    machine = _Rising()
+    motion = settle_point(machine, 40, most_blows=160)
+    assert SETTLE_GROWTH == 4 and not motion["settled"] and motion["n_blows"] == 160
+    assert machine.runs == pytest.approx([40 / SETTLE_FIRST_HZ, 160 / 50.0], rel=1e-12)
+    assert settle_point(_Rising(), 40)["n_blows"] == 40  # (most_blows default: one run)
+    for call, name in ((lambda: settle_point(_Rising(), 40, most_blows=39), "most_blows"),
+                       (lambda: settle_run(_Rising(), 40, rate_hz=0.0), "rate_hz")):
+        with pytest.raises(ValueError, match=name) as err:
+            call()
+        assert "\n" not in str(err.value)

@@ -8,11 +8,14 @@ import math
 
 import numpy as np
 
-__all__ = ["SETTLE_FIRST_HZ", "SETTLE_RUNS", "SETTLE_LONGEST", "settle_run", "settle_point"]
+__all__ = ["SETTLE_FIRST_HZ", "SETTLE_GROWTH", "SETTLE_RUNS", "SETTLE_LONGEST", "settle_run", "settle_point"]
 
 #: a settle's first run lasts its blows at this blow frequency (Hz); a run holding fewer blows is
 #: followed by a longer one, from rest again
 SETTLE_FIRST_HZ = 40.0
+#: a settle not settled in its blows and allowed more (``most_blows``) runs again from rest with this
+#: many times more
+SETTLE_GROWTH = 4
 #: most runs a settle makes before it classifies what the last one holds
 SETTLE_RUNS = 8
 #: the longest run, in units of the first: its blows at a sixteenth of :data:`SETTLE_FIRST_HZ` (2.5 Hz),
@@ -34,10 +37,10 @@ def _impacts(machine, duration_s: float):
     return np.asarray(tr.impact_times, float) / om, np.asarray(tr.impact_velocities, float) * length * om
 
 
-def settle_run(machine, blows: int, blow_fraction: float = 0.25):
+def settle_run(machine, blows: int, blow_fraction: float = 0.25, *, rate_hz: float = SETTLE_FIRST_HZ):
     """The impacts of the machine from rest up to its ``blows``-th blow.
 
-    The first run lasts ``blows / SETTLE_FIRST_HZ`` seconds; where it holds fewer blows (impacts at
+    The first run lasts ``blows / rate_hz`` seconds; where it holds fewer blows (impacts at
     least ``blow_fraction`` of its hardest) a longer one follows, from rest again, up to
     :data:`SETTLE_RUNS` runs and at most :data:`SETTLE_LONGEST` times the first. The impacts after
     the ``blows``-th blow are dropped.
@@ -49,6 +52,9 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25):
         Blows wanted, at least 1.
     blow_fraction : float
         Threshold between blows and chatter (:meth:`impactbar.physical.SimulationResult.is_blow`).
+    rate_hz : float
+        The blow frequency (Hz) the first run's length assumes, above 0: default
+        :data:`SETTLE_FIRST_HZ`; a shorter run's rate where a longer one follows it.
 
     Returns
     -------
@@ -60,9 +66,12 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25):
     Raises
     ------
     ValueError
-        Where the machine's ``simulate`` refuses (a circuit's oil cavitates during the run).
+        Where the machine's ``simulate`` refuses (a circuit's oil cavitates during the run), or
+        ``rate_hz`` is not above 0.
     """
-    ran, duration = 0.0, blows / SETTLE_FIRST_HZ
+    if not rate_hz > 0.0:
+        raise ValueError(f"rate_hz must be above 0 Hz; got {rate_hz!r}")
+    ran, duration = 0.0, blows / rate_hz
     longest = SETTLE_LONGEST * duration
     for _ in range(SETTLE_RUNS):
         t, v = _impacts(machine, duration)
@@ -81,7 +90,8 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25):
     return t, v, ran
 
 
-def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolerance: float = 0.01) -> dict:
+def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolerance: float = 0.01, *,
+                 most_blows: int | None = None) -> dict:
     r"""The motion of a machine from rest over ``blows`` blows (:func:`settle_run`), classified by
     :meth:`impactbar.physical.SimulationResult.blow_statistics`.
 
@@ -98,6 +108,11 @@ def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolera
         Blows simulated from rest, at least 8.
     blow_fraction, settle_tolerance : float
         As :meth:`~impactbar.physical.SimulationResult.blow_statistics` takes them.
+    most_blows : int, optional
+        Where the motion has not settled in ``blows``, runs from rest of :data:`SETTLE_GROWTH`
+        times more blows follow, up to ``most_blows`` (at least ``blows``): the classification run
+        until it can tell (a drifter's blows rising with its supply pressure for some 80 blows
+        before they alternate). Default ``blows``: one run.
 
     Returns
     -------
@@ -108,7 +123,7 @@ def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolera
     Raises
     ------
     ValueError
-        Where the machine's ``simulate`` refuses.
+        Where the machine's ``simulate`` refuses, or ``most_blows`` is below ``blows``.
 
     Examples
     --------
@@ -120,10 +135,20 @@ def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolera
     """
     from .results import SimulationResult
 
-    t, v, end = settle_run(machine, blows, blow_fraction)
-    res = SimulationResult(hammer=None, trajectory=None, t_end_s=end, impact_times_s=t,
-                           impact_velocities_m_s=v, blow_energies_J=0.5 * machine.bar.mass_kg * v * v)
-    stats = res.blow_statistics(blow_fraction=blow_fraction, settle_tolerance=settle_tolerance)
+    most = blows if most_blows is None else most_blows
+    if not (isinstance(most, int) and most >= blows):
+        raise ValueError(f"most_blows must be an integer at least blows ({blows}); got {most_blows!r}")
+    rate = SETTLE_FIRST_HZ
+    while True:
+        t, v, end = settle_run(machine, blows, blow_fraction, rate_hz=rate)
+        res = SimulationResult(hammer=None, trajectory=None, t_end_s=end, impact_times_s=t,
+                               impact_velocities_m_s=v, blow_energies_J=0.5 * machine.bar.mass_kg * v * v)
+        stats = res.blow_statistics(blow_fraction=blow_fraction, settle_tolerance=settle_tolerance)
+        if stats.settled or blows >= most:
+            break
+        # (the next run's length at the rate seen: the blows come faster as a supply charges)
+        rate = max(rate, stats.n_blows / end) if end > 0.0 else rate
+        blows = min(SETTLE_GROWTH * blows, most)
     blow = res.is_blow(blow_fraction)
     idx = np.flatnonzero(blow & (t >= 0.5 * end))  # the second half's blows (as blow_statistics has them)
     m = stats.blows_per_cycle
