@@ -56,10 +56,10 @@ def test_the_drives_pieces_have_no_step_where_a_short_step_is_taken_over(tiny):
 
 def test_the_drifters_coupled_blow_meets_a_drive_without_steps():
     """On ``examples/circuit_drifter_rock.toml`` the drive's integration restarts at each jump of the
-    arriving wave, 41 times over the blow: the drive the last iterate's blow met is continuous at
-    every one of its pieces' joins (a step there, 2 % of the force where a short first step's cubic
-    was continued over the next step, sends the piston a jump that moves with the data and that the
-    blow's tangent does not carry)."""
+    arriving wave: the drive the last iterate's blow met is continuous at every join of its pieces
+    (a step there, up to a fifth of the force where a short first step's cubic was continued over
+    the next step, sends the piston a jump that moves with the data and that the blow's tangent
+    does not carry)."""
     model, drive, state, t0, q, v = drifter_arrival()
     blow = model.law.driven_contact(model, drive, state, t0, q, v)
     starts, pieces = blow.record._map.drive

@@ -153,7 +153,7 @@ class _Force:
         A step shorter than ``1e-9`` of the horizon (the integrator's first step after a restart,
         some ``1e-13``) is taken over by the step after it, whose cubic is continued back over it
         (re-expanded about the short step's start): the short step's own cubic continued forward
-        over the next step would miss that step's end by up to 2 % of the force (a spurious step
+        over the next step would miss that step's end by up to a fifth of the force (a spurious step
         of the drive, which moves with the data)."""
         starts, coefs = self.starts, self.coefs
         short = np.append(np.diff(starts) <= 1e-9 * horizon, False)
