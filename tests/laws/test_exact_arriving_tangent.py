@@ -113,3 +113,51 @@ def test_the_arriving_waves_tangent_is_the_central_difference_of_the_blows(name)
             tangent += float(np.sum(pulses[d][pulses[d][:, 0] - T0 <= X, 1]))
             # (measured: 1.4e-10; the impulses' part up to 1.1)
             assert abs(tangent - fd_int) <= 1e-8 * size * (X + T0)
+
+
+def test_a_drive_direction_of_short_cubic_pieces_keeps_its_size():
+    """Along a direction of the drive (the coupled blow's: a circuit's force, one cubic per
+    integrator step, some 6e-9 long after each restart), a short piece's monomials' coefficients
+    (here up to 1e18, its values 1e-8) do not set the direction's size: the arriving wave's tangent is
+    the central difference of the blows with the drive moved along it (and the piston's static
+    strain at impact with it), at the drifter's second arrival (``examples/circuit_drifter_rock.toml``)."""
+    from coupled_reference import drifter_arrival
+
+    model, drive, state, t0, q, v = drifter_arrival()
+    bmap = model.law.driven_contact(model, drive, state, t0, q, v).record._map
+    q = q.copy()
+    q[0] -= float(bmap.basis.end_weights @ q)
+    T0 = float(bmap.basis.travel[0])
+    starts, pieces = bmap.drive
+    spans = np.diff(np.append(starts, starts[-1] + 1.0))
+    assert np.min(spans) < 1e-8
+    # the direction: the force itself, with a bump 1e18 tau^2 (tau - L) on every piece shorter than 1e-7
+    direction = []
+    for (e, d, c), L in zip(pieces, spans, strict=True):
+        c = np.array(c, dtype=complex)
+        if L < 1e-7 and c.size == 4:
+            c[2] -= 1e18 * L
+            c[3] += 1e18
+        direction.append((e, d, c))
+    ws, scale = EJ._primal(bmap, q, v)
+    _, _, on_stop = EJ._plus(bmap, ws, scale)
+    times = np.linspace(0.0, T0 + bmap.duration, 401)[1:-1]
+    zero = np.zeros((1, q.size))
+    along = (starts, [(e, d, c[None]) for e, d, c in direction])
+    *_, dG, _ = EJ.tangents(bmap, ws, scale, initial_waves(bmap.basis, zero, zero, np.array([bmap.p_end])),
+                            along, None, on_stop, arriving=times)
+    h, p_end = 1e-6, bmap.p_end
+    waves = []
+    for sign in (1.0, -1.0):
+        bmap.drive = (starts, [(e, d, np.asarray(c) + sign * h * cd) for (e, d, c), (_, _, cd)
+                               in zip(pieces, direction, strict=True)])
+        bmap.p_end = p_end * (1.0 + sign * h)
+        waves.append(_primal_wave(bmap, q, v))
+    bmap.drive, bmap.p_end = (starts, pieces), p_end
+    (up, breaks), (down, _) = waves
+    fd = (up(times - T0) - down(times - T0)) / (2.0 * h)
+    near = np.min(np.abs(times[:, None] - T0 - breaks[None, :]), axis=1) < 1e-4
+    size = float(np.max(np.abs(fd)))
+    assert size > 0.1
+    # (measured: 2.1e-9 of its size; 5e-5 where the direction's size was taken from its coefficients)
+    assert np.max(np.abs(dG[0] - fd)[~near]) <= 1e-7 * size

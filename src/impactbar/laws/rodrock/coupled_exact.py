@@ -147,15 +147,33 @@ class _Force:
 
     def pieces(self, lead, horizon):
         """The force as the exact solver's ``drive``: a piece held at the force at impact from
-        ``-lead`` (at least the chain's shortest travel time), one cubic per step (steps shorter
-        than ``1e-9`` of the horizon merged into the one before), and the force at ``horizon``
-        held after it."""
-        keep = np.concatenate(([True], np.diff(self.starts) > 1e-9 * horizon)) & (self.starts < horizon)
-        starts = np.concatenate(([-lead], self.starts[keep], [horizon]))
+        ``-lead`` (at least the chain's shortest travel time), one cubic per step, and the force at
+        ``horizon`` held after it.
+
+        A step shorter than ``1e-9`` of the horizon (the integrator's first step after a restart,
+        some ``1e-13``) is taken over by the step after it, whose cubic is continued back over it
+        (re-expanded about the short step's start): the short step's own cubic continued forward
+        over the next step would miss that step's end by up to a fifth of the force (a spurious step
+        of the drive, which moves with the data)."""
+        starts, coefs = self.starts, self.coefs
+        short = np.append(np.diff(starts) <= 1e-9 * horizon, False)
+        # each kept step starts where the run of short steps just before it starts
+        run = np.concatenate(([True], ~short[:-1]))  # (a step that starts a run)
+        origin = starts[np.maximum.accumulate(np.where(run, np.arange(starts.size), 0))]
+        keep = ~short & (origin < horizon)
+        new_starts, cubics = origin[keep], coefs[keep].copy()
+        shift = (starts - origin)[keep]
+        moved = shift > 0.0
+        if np.any(moved):  # P(x - d), P's coefficients x^3 first
+            d = shift[moved]
+            c3, c2, c1, c0 = cubics[moved].T
+            cubics[moved] = np.column_stack((c3, c2 - 3.0 * c3 * d, c1 - 2.0 * c2 * d + 3.0 * c3 * d * d,
+                                             c0 - c1 * d + c2 * d * d - c3 * d * d * d))
+        starts = np.concatenate(([-lead], new_starts, [horizon]))
         degs, zero = np.arange(4), np.zeros(1, dtype=np.int64)
         held = (np.zeros(1), zero, np.array([self.p0], dtype=complex))
         zeros = np.zeros(4)  # (one array for all: read only)
-        cubics = [(zeros, degs, c) for c in self.coefs[keep][:, ::-1].astype(complex)]
+        cubics = [(zeros, degs, c) for c in cubics[:, ::-1].astype(complex)]
         last = (np.zeros(1), zero, np.array([float(self(horizon)[0])], dtype=complex))
         return starts, [held, *cubics, last]
 

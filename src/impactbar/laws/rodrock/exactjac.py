@@ -115,12 +115,14 @@ def _plus(bmap, ws, scale):
     return qa, va, over > 0.0
 
 
-def _bound(pieces, reach):
+def _bound(pieces, reach, spans=False):
     """Each direction's bound of its pieces (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s
-    scale): ``max over pieces of sum |c| max(L, 1)^d``, ``coefs`` of shape ``(K, n)``."""
-    return np.max([np.sum(np.abs(c) * max(r, 1.0) ** d, axis=-1) for (_, d, c), r in zip(pieces, reach,
-                                                                                         strict=True)],
-                  axis=0)
+    scale): ``max over pieces of sum |c| max(L, 1)^d``, ``coefs`` of shape ``(K, n)``; with ``spans``
+    (a drive's pieces, ``reach`` their spans) ``sum |c| L^d``, the sup over a piece's span, as the
+    primal's drive takes it (a short piece's monomials' coefficients are large, up to 1e18 on the
+    integrator's 6e-9 steps, and must not set the direction's size)."""
+    return np.max([np.sum(np.abs(c) * (r if spans else max(r, 1.0)) ** d, axis=-1)
+                   for (_, d, c), r in zip(pieces, reach, strict=True)], axis=0)
 
 
 def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=False, arriving=None):
@@ -183,7 +185,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     if drive is not None:
         starts, drive_pieces = drive
         spans = np.diff(np.append(starts, starts[-1] + 1.0))
-        scales = np.maximum(scales, _bound(drive_pieces, spans))
+        scales = np.maximum(scales, _bound(drive_pieces, spans, spans=True))
     scales = np.maximum(scales, [max((abs(w) for _, w, _ in x), default=0.0) for x in impulses])
     scales[scales == 0.0] = 1.0  # (a zero direction: zero)
     pieces = list(waves) + ([] if drive is None else list(drive_pieces))
