@@ -9,6 +9,7 @@ unit circle: ``-1`` for period doubling, ``+1`` for a fold), and the edge of adm
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -209,21 +210,15 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
         return []
     hi = min(edge, 50.0) * (1.0 - 1e-9)
 
-    known = {}  # each load factor's multipliers once: the root Brent returns is one it evaluated
-
+    @functools.cache  # each load factor's multipliers once: the root Brent returns is one it evaluated
     def mu(lf):
-        if lf in known:
-            return known[lf]
         load = CosineLoad(lf / k, 1.0, k)
         ph = _stable_branch_phase(model, load)
         if ph is None:
-            m = None
-        elif criterion == "paper":  # the paper's bounds (eq. 39) come from its rigid block (eqs. 29, 30)
-            m = orbit_multipliers(model, load, ph, paper=True)[:2]
-        else:
-            m = orbit_multipliers(model, load, ph)
-        known[lf] = m
-        return m
+            return None
+        if criterion == "paper":  # the paper's bounds (eq. 39) come from its rigid block (eqs. 29, 30)
+            return orbit_multipliers(model, load, ph, paper=True)[:2]
+        return orbit_multipliers(model, load, ph)
 
     def h(lf):
         m = mu(lf)
