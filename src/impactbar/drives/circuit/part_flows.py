@@ -16,13 +16,9 @@ import numpy as np
 
 from . import _network as NW
 from . import kinds as KD
+from .kinds._flow import phi
 
 __all__ = ["part_flows"]
-
-
-def _phi(dp, ptr2):
-    """The orifice law :func:`.kinds._flow.phi` on arrays."""
-    return dp * (dp * dp + ptr2) ** -0.25
 
 
 def part_flows(drive, z, gap) -> dict:
@@ -82,7 +78,7 @@ def part_flows(drive, z, gap) -> dict:
             for f, r in zip(flows, recs, strict=True):
                 pa, pb = pressure(int(r[NW.O_FROM]))[sel], pressure(int(r[NW.O_TO]))[sel]
                 if int(r[NW.KIND]) == NW.ORIFICE:
-                    f[sel] = r[NW.O_K] * _phi(pa - pb, r[NW.O_PTR2])
+                    f[sel] = r[NW.O_K] * phi.py_func(pa - pb, r[NW.O_PTR2])  # (the law on arrays)
                 else:
                     f[sel] = [q for q, *_ in (KD.law(int(r[NW.KIND]), r, 0, a, b, y)
                                               for a, b, y in zip(pa, pb, gap[sel], strict=True))]
