@@ -91,8 +91,8 @@ def motion_summary(motion: dict) -> str:
         return f"no motion from rest: {motion['error']}"
     m = motion["period_blows"]
     # (the spread of the cycle's impact velocities: their standard deviation over their mean)
-    cv = 100.0 * motion["impact_velocity_spread"] / motion["impact_velocity"] if m > 1 else 0.0
-    spread = f", {cv:.2g} % spread" if m > 1 else ""
+    spread = (f", {100.0 * motion['impact_velocity_spread'] / motion['impact_velocity']:.2g} % spread"
+              if m > 1 else "")
     head = (f"settles into a period-{m} motion ({m} blow{'s' if m > 1 else ''} per cycle{spread})" if m
             else f"not settled in {motion['n_blows']} blows")
     chatter = motion["chatter_per_blow"]
