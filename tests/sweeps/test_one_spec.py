@@ -87,3 +87,21 @@ def test_the_machine_is_the_task_s_and_the_other_s_fields_are_refused():
                                          r"\['model'\]"):
         SweepSpec(task="settle", model={"s": 100.0}, config=config,
                   axes=(config_axis(config, "supply.pump_flow", {"values": ["60 L/min"]}),))
+
+
+def test_a_question_the_spec_s_machine_cannot_answer_is_a_one_line_value_error():
+    """A design map has no dimensionless parameters (its axes are config keys), and neither kind of
+    spec has an axis it was not given: each a ``ValueError`` naming what is allowed."""
+    design = parse_spec({"task": "operating_point", "config": "circuit-drifter",
+                         "axes": {"supply.pump_flow": {"values": ["60 L/min", "70 L/min"]}}})
+    with pytest.raises(ValueError, match="its axes are the config's dotted keys"):
+        design.parameters()
+    bar = parse_spec({"task": "orbits", "model": {"s": 1.37, "d": 0.02, "R": 0.8, "n_modes": 0},
+                      "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+                      "axes": {"p0": {"values": [0.5, 0.6]}}})
+    assert "p0" in bar.parameters()
+    for spec, axis in ((design, "supply.pump_flow"), (bar, "p0")):
+        for ask in (spec.axis_attrs, lambda name, spec=spec: spec.axis_text(name, 1.0)):
+            with pytest.raises(ValueError, match=f"one of \\['{axis}'\\]; got 'x'"):
+                ask("x")
+    assert design.axis_attrs("supply.pump_flow")["units"] == "m3/s" and bar.axis_attrs("p0")["units"] == "1"

@@ -14,7 +14,7 @@ from .._shared.parameters import parameters
 from ..loads import LOADS
 from .bar_spec import BAR, _base
 from .bar_spec import closed_form_task as closed_form_task
-from .grid import BAR_TASKS, DRIFTER_TASKS, TASKS, ChunkedGrid, cf_unit
+from .grid import BAR_TASKS, DRIFTER_TASKS, TASKS, Axis, ChunkedGrid, cf_unit
 from .map_spec import DRIFTER
 from .tasks import motion_classes as motion_classes
 
@@ -155,32 +155,116 @@ class SweepSpec(ChunkedGrid):
         return self.space.extra_size(self)
 
     def parameters(self) -> dict:
-        """The parameters of the spec's base bar and load (:func:`impactbar.parameters.parameters`,
-        a dict of str to Parameter): every name an axis may take, with its record (value at the base,
-        range, description)."""
+        """The parameters of the spec's base bar and load: every name an axis may take, with its
+        record (theory section 2).
+
+        Returns
+        -------
+        dict of str to Parameter
+            :func:`impactbar.parameters.parameters` of the base bar and its load or drive: the value
+            at the base, the range, the description.
+
+        Raises
+        ------
+        ValueError
+            For a drifter's design map, whose axes are its config's dotted keys in SI
+            (:mod:`impactbar.physical.tree`), not the dimensionless bar's parameters.
+        """
+        if self.model is None:
+            raise ValueError(f"task {self.task!r} sweeps {self.space.what}: its axes are the config's dotted "
+                             "keys (impactbar.physical.tree.fields()), not the bar's parameters")
         return parameters(*_base(self))
 
     def point(self, index=None, values: dict | None = None):
-        """The machine at a grid point ``index`` (tuple of int, shape (n_axes,)), its axis values
-        replaced by ``values`` (axis name to value in the axis' unit): ``(BarModel, Load or Drive)``,
-        or the ``Drifter`` or ``CircuitDrifter`` built from the config."""
+        """The machine at a grid point.
+
+        Parameters
+        ----------
+        index : tuple of int, shape (n_axes,), optional
+            The point's index along each axis; ``None``: the base values.
+        values : dict, optional
+            Axis name to a value in the axis' unit (dimensionless, or SI for a design map),
+            replacing the point's.
+
+        Returns
+        -------
+        tuple or Drifter or CircuitDrifter
+            ``(BarModel, Load or Drive)`` for a sweep of the dimensionless bar; the drifter built
+            from the config for a design map.
+
+        Raises
+        ------
+        ValueError
+            Where the machine refuses a value (its one-line message, naming the key).
+        """
         at = {} if index is None else {a.name: a.values[i] for a, i in zip(self.axes, index, strict=True)}
         return self.space.point(self, {**at, **(values or {})})
 
     def variables(self):
-        """The variables the task stores (a ``Schema`` of :class:`~impactbar._shared.schema.Field`:
-        dtype, fill, long name, units; ``per`` the extra dimension of those along it)."""
+        """The variables the task stores.
+
+        Returns
+        -------
+        Schema
+            Of :class:`~impactbar._shared.schema.Field`: name, dtype, fill, long name, units (CF),
+            ``per`` the extra dimension of those along it.
+        """
         return self.space.variables(self)
 
+    def _axis(self, name: str) -> Axis:
+        """The axis ``name``; a ``ValueError`` listing the axes where there is none."""
+        for a in self.axes:
+            if a.name == name:
+                return a
+        raise ValueError(f"name must be an axis of this sweep, one of {[a.name for a in self.axes]}; "
+                         f"got {name!r}")
+
     def axis_attrs(self, name: str) -> dict:
-        """``long_name`` and ``units`` (CF: ``"1"`` dimensionless) of an axis' coordinate."""
-        ax = next(a for a in self.axes if a.name == name)
+        """The attributes of an axis' stored coordinate.
+
+        Parameters
+        ----------
+        name : str
+            An axis of the spec.
+
+        Returns
+        -------
+        dict
+            ``long_name`` (its parameter's description, or its config key) and ``units`` (CF:
+            ``"1"`` for a dimensionless parameter, eq. 2; SI for a design map's key).
+
+        Raises
+        ------
+        ValueError
+            ``name`` is not an axis.
+        """
+        ax = self._axis(name)
         return {"long_name": self.space.axis_name(self, name), "units": cf_unit(ax.unit) or "1"}
 
     def axis_text(self, name: str, value, digits: int = 6) -> str:
-        """An axis value as a reader writes it, to ``digits`` significant digits: a design map's in
-        the unit its config writes the key in (:func:`~impactbar.physical.display_units.format_key`),
-        a dimensionless one bare."""
+        """An axis value as a reader writes it.
+
+        Parameters
+        ----------
+        name : str
+            An axis of the spec.
+        value : float
+            In the axis' unit (dimensionless, or SI for a design map).
+        digits : int
+            Significant digits.
+
+        Returns
+        -------
+        str
+            A design map's value in the unit its config writes the key in
+            (:func:`~impactbar.physical.display_units.format_key`), a dimensionless one bare.
+
+        Raises
+        ------
+        ValueError
+            ``name`` is not an axis.
+        """
+        self._axis(name)
         return self.space.axis_text(self, name, value, digits)
 
     # -- serialisation ------------------------------------------------------------------------
