@@ -5,6 +5,7 @@ processes (the scripts' ``--against SRC``). Imported by the scripts of this fold
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
@@ -64,3 +65,16 @@ def fresh_runs(script, src, rounds: int = 3, args=()) -> dict:
                                  capture_output=True, text=True).stdout
             runs[name].append(json.loads(out.strip().splitlines()[-1]))
     return runs
+
+
+def against_parser(doc: str, what: str, rounds: int) -> argparse.ArgumentParser:
+    """The command line of a script timed per process and compared with another package tree
+    (:func:`fresh_runs`): ``--reps`` (timed ``what`` per process), ``--rounds`` (processes per tree,
+    default ``rounds``), ``--against SRC`` and the child's hidden ``--json``; described by the first
+    paragraph of ``doc``."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--reps", type=int, default=2, help=f"timed {what} per process")
+    parser.add_argument("--rounds", type=int, default=rounds, help="processes per tree with --against")
+    parser.add_argument("--against", metavar="SRC", help="compare with the package tree SRC")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
+    return parser

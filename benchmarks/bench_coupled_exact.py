@@ -14,14 +14,13 @@ modal state after) between the trees.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import time
 from pathlib import Path
 
 import numpy as np
-from _timing import fresh_runs  # this folder's shared runner of two trees
+from _timing import against_parser, fresh_runs  # this folder's shared runner of two trees
 
 import impactbar as ib
 from impactbar.physical import build, read_config, with_values
@@ -79,12 +78,7 @@ def against(src, rounds=2, reps=2):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--reps", type=int, default=2, help="timed blows per process")
-    parser.add_argument("--rounds", type=int, default=2, help="processes per tree with --against")
-    parser.add_argument("--against", metavar="SRC", help="compare with the package tree SRC")
-    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
-    args = parser.parse_args(argv)
+    args = against_parser(__doc__, "blows", rounds=2).parse_args(argv)
     if args.json:
         print(json.dumps(measure(args.reps)))
     elif args.against:

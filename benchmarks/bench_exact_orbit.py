@@ -20,14 +20,13 @@ side, the baseline's first, with the largest relative difference of the exact or
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import time
 import tomllib
 from pathlib import Path
 
-from _timing import fresh_runs  # this folder's shared runner of two trees
+from _timing import against_parser, fresh_runs  # this folder's shared runner of two trees
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
@@ -92,12 +91,7 @@ def against(src, rounds: int, reps: int) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--reps", type=int, default=2, help="timed orbits per process")
-    parser.add_argument("--rounds", type=int, default=1, help="processes per tree with --against")
-    parser.add_argument("--against", metavar="SRC", help="compare with the package tree SRC")
-    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
-    args = parser.parse_args(argv)
+    args = against_parser(__doc__, "orbits", rounds=1).parse_args(argv)
     if args.json:
         print(json.dumps(measure(args.reps)))
         return 0
