@@ -198,3 +198,38 @@ def test_a_settle_not_settled_runs_again_to_its_most_blows_and_refuses_bad_bound
         with pytest.raises(ValueError, match=name) as err:
             call()
         assert "\n" not in str(err.value)
+
+
+def test_the_design_maps_page_s_settle_figures():
+    """The figures the page "Design maps" quotes of the preset's settle points at 60, 90 and
+    120 L/min (40 blows from rest) against its operating points: at 60 L/min (multiplier 0.93) the
+    last blow 2.7 % and 2.2 % short of the orbit's, not settled, the second half's figures quoted; at
+    90 and 120 L/min the orbit's blow frequency and impact velocity to 3e-10."""
+    from impactbar.physical.settle import settle_point, settle_run
+
+    cfg = read_config("circuit-drifter")[0]
+    at = {}
+    for flow in ("60 L/min", "90 L/min", "120 L/min"):
+        machine = build(with_values(cfg, {"supply.pump_flow": flow}))
+        at[flow] = (machine, machine.orbit(), settle_point(machine, 40))
+    machine, orbit, motion = at["60 L/min"]
+    assert round(max(abs(complex(m)) for m in orbit.orbit.multipliers), 2) == 0.93
+    assert (round(orbit.impact_velocity_m_s, 2), round(orbit.blow_frequency_Hz, 2)) == (8.89, 41.74)
+    t, v, _ = settle_run(machine, 40)
+    blow = v >= BLOW_FRACTION * v.max()
+    tb, vb = t[blow], v[blow]
+    assert (round(vb[-1], 2), round(1.0 / (tb[-1] - tb[-2]), 2)) == (8.65, 40.82)
+    assert round(100 * (1 - vb[-1] / orbit.impact_velocity_m_s), 1) == 2.7
+    assert round(100 * (1 - 1.0 / (tb[-1] - tb[-2]) / orbit.blow_frequency_Hz), 1) == 2.2
+    steps = np.abs(np.diff(vb[-3:]))
+    assert round(100 * steps[-1] / vb[-1], 2) == 0.19 and round(steps[-1] / steps[-2], 2) == 0.94
+    assert not motion["settled"] and motion["period_blows"] == 0
+    assert (round(motion["impact_velocity"], 2), round(motion["blow_frequency"], 2)) == (8.40, 39.82)
+    off = []
+    for flow, mu, hz in (("90 L/min", 0.39, 49.07), ("120 L/min", 0.22, 49.99)):
+        _, orbit, motion = at[flow]
+        assert round(max(abs(complex(m)) for m in orbit.orbit.multipliers), 2) == mu
+        assert motion["period_blows"] == 1 and round(motion["blow_frequency"], 2) == hz
+        off += [abs(motion["impact_velocity"] / orbit.impact_velocity_m_s - 1.0),
+                abs(motion["blow_frequency"] / orbit.blow_frequency_Hz - 1.0)]
+    assert float(f"{max(off):.0e}") <= 3e-10, off  # ("to 3e-10", to the digit quoted)
