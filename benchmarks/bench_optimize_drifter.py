@@ -20,8 +20,9 @@ designs at most (a check that it runs, in minutes).
 or a tree's ``src`` folder, its numba caches kept) and on this tree, each in a fresh process, and
 prints side by side the designs evaluated (and continued from a neighbour), those without an operating
 point and the CPU seconds they cost (the evaluations that raised and their records' classification,
-timed in the search's process; a sample's designs on workers by their records' seconds), all designs'
-CPU seconds, the wall and CPU time of the call, the certificate's verdict and KKT residual (``none``
+timed in the search's process; a sample's designs on workers by their records' seconds), apart the
+classification after the search of the designs the result lists (a tree that classifies none in
+the search), all designs' CPU seconds, the wall and CPU time of the call, the certificate's verdict and KKT residual (``none``
 on a tree without one) and the gain, e.g. ``--against 15d5b20`` (before the certificate, the stall
 test and the failures' classification).
 """
@@ -76,12 +77,15 @@ def _multistart_summary(res) -> None:
 @contextlib.contextmanager
 def _timed_designs():
     """The CPU seconds of the search's evaluations in this process: ``evaluate_design``'s calls (each
-    whether it raised) and the failed records' (their motion classified), as the search module looks
-    them up (on any tree: a name missing there is not timed)."""
+    whether it raised), the failed records' (their motion classified, on a tree that classifies it
+    there) and, after the search, the classification of the designs the result lists
+    (``classify_listed``, on a tree that leaves it to then), as the search module looks them up (on
+    any tree: a name missing there is not timed)."""
     module = inspect.getmodule(optimize_drifter)
-    calls = {"ok": 0.0, "failed": 0.0, "n_failed": 0}
+    calls = {"ok": 0.0, "failed": 0.0, "n_failed": 0, "classified": 0.0}
+    bucket = {"evaluate_design": "ok", "failed_record": "failed", "classify_listed": "classified"}
 
-    def timed(fn, failure: bool):
+    def timed(fn, name: str):
         def wrapper(*args, **kwargs):
             c0 = time.process_time()
             try:
@@ -89,14 +93,14 @@ def _timed_designs():
             except Exception:
                 calls["failed"] += time.process_time() - c0
                 raise
-            calls["failed" if failure else "ok"] += time.process_time() - c0
-            calls["n_failed"] += failure
+            calls[bucket[name]] += time.process_time() - c0
+            calls["n_failed"] += name == "failed_record"
             return out
         return wrapper
 
-    saved = {n: getattr(module, n) for n in ("evaluate_design", "failed_record") if hasattr(module, n)}
+    saved = {n: getattr(module, n) for n in bucket if hasattr(module, n)}
     for name, fn in saved.items():
-        setattr(module, name, timed(fn, name == "failed_record"))
+        setattr(module, name, timed(fn, name))
     try:
         yield calls
     finally:
@@ -112,6 +116,7 @@ def summary(res, wall: float, cpu: float, calls: dict) -> dict:
                 r.get("continued", False) for r in res.history),
             "without an operating point": len(failed),
             "their CPU s": calls["failed"],
+            "the listed classified CPU s": calls["classified"],
             "their recorded s": sum(r.get("seconds", 0.0) + r.get("motion_seconds", 0.0) for r in failed),
             "all designs CPU s": calls["ok"] + calls["failed"], "wall s": wall, "CPU s": cpu,
             "certificate": cert.verdict if cert is not None else "none",

@@ -10,10 +10,16 @@ import pytest
 from drifter_optimum import EXAMPLE, SEARCHED, collar
 
 from impactbar.orbits import coupled
-from impactbar.physical import build, read_config, with_values
+from impactbar.physical import build, read_config, settle, with_values
 from impactbar.physical.optimize_cache import dumps
 from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, _design_record
-from impactbar.physical.optimize_failures import failures_table
+from impactbar.physical.optimize_failures import (
+    MOTION_BLOWS,
+    MOTION_MOST_BLOWS,
+    NOT_CLASSIFIED,
+    classify_failed,
+    failures_table,
+)
 
 pytest.importorskip("pint")
 
@@ -65,13 +71,34 @@ def test_a_design_whose_motion_from_rest_alternates_hands_newton_its_start_at_on
     assert np.all(np.abs(np.diff(v[-6:])) >= 1.5e-3 * v[-1])
 
 
-def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_there():
+def _counted_settles(monkeypatch) -> list:
+    """``settle_point``'s calls from now on (its arguments), the function itself still run."""
+    calls, point = [], settle.settle_point
+
+    def counted(*args, **kwargs):
+        calls.append((args, kwargs))
+        return point(*args, **kwargs)
+
+    monkeypatch.setattr(settle, "settle_point", counted)
+    return calls
+
+
+def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_there(monkeypatch):
     cfg, folder = read_config(EXAMPLE)
     changes = collar(1.01)
+    calls = _counted_settles(monkeypatch)
     rec = _design_record(changes, cfg, folder, dict(DEFAULT_CONSTRAINTS, mean_supply_pressure=None))
     assert rec["ok"] is False and rec["feasible"] is False
     assert "no periodic orbit" in rec["error"] and "Newton stalled" in rec["error"]
+    # the search's evaluation runs no motion from rest (160 blows, several evaluations' cost): its
+    # record says so, and the motion is classified where the result reports the design
+    assert not calls and "motion" not in rec and rec["motion_summary"] == NOT_CLASSIFIED
+    assert classify_failed(rec, build(with_values(cfg, changes), folder)) is rec and len(calls) == 1
     assert 0.0 < rec["seconds"] < 60.0 and rec["motion_seconds"] > 0.0
+    # the same figures, to the bit, as the settle task's on a design built afresh
+    direct = settle.settle_point(build(with_values(cfg, changes), folder), MOTION_BLOWS,
+                                 most_blows=MOTION_MOST_BLOWS)
+    assert json.dumps(direct, sort_keys=True) == json.dumps(rec["motion"], sort_keys=True)
     # what the drill does there: the settle task's classification of its motion from rest, run until
     # it can tell (40 blows still rise with the supply pressure; 160 are classified), checked against
     # a run of simulate from rest of the same length
@@ -111,7 +138,7 @@ def test_the_searched_design_s_record_says_the_two_blow_cycle_that_simulate_from
     cycle against a longer run of simulate from rest (4 s, some 200 blows)."""
     cfg, folder = read_config(EXAMPLE)
     rec = _design_record(SEARCHED, cfg, folder, dict(DEFAULT_CONSTRAINTS, mean_supply_pressure=None))
-    motion = rec["motion"]
+    motion = classify_failed(rec, build(with_values(cfg, SEARCHED), folder))["motion"]
     assert "no periodic orbit" in rec["error"] and motion["period_blows"] == 2
     assert motion["chatter_per_blow"] == 0.0 and motion["n_blows"] == 160
     assert rec["motion_summary"].startswith("settles into a period-2 motion (2 blows per cycle, 0.081 % "
@@ -125,3 +152,74 @@ def test_the_searched_design_s_record_says_the_two_blow_cycle_that_simulate_from
     # the record's cycle (its last two of 160 blows) is that cycle, still settling by 5e-6
     assert motion["impact_velocity"] == pytest.approx(np.mean(v[-2:]), rel=2e-5)
     assert motion["impact_velocity_spread"] == pytest.approx(np.std(v[-2:]), rel=1e-3)
+
+
+_NO_ORBIT = "find_orbit found no periodic orbit of the drive with one impact per period; tried"
+#: what the settle task's stand-in says (the classification's own figures: the tests above)
+_MOTION = {"period_blows": 2, "chatter_per_blow": 0.0, "blow_frequency": 50.0, "impact_velocity": 9.0,
+           "impact_velocity_spread": 0.009, "n_blows": 160}
+
+
+def test_only_the_designs_a_result_lists_are_classified_the_others_say_they_are_not(monkeypatch):
+    """Eight designs without an operating point (the third's oil cavitates: no motion to classify):
+    the table lists five, and only the four of those without an orbit are classified, each once."""
+    from impactbar.physical.optimize_failures import classify_listed, failed_record
+
+    got = []
+    monkeypatch.setattr(settle, "settle_point", lambda d, blows, **kw: got.append((d, blows, kw)) or _MOTION)
+    history = [{"ok": True, "seconds": 0.3}]
+    for i in range(8):
+        err = ValueError("the oil cavitates" if i == 2 else _NO_ORBIT)
+        rec = failed_record(err, 1.0, f"drifter {i}", classify=False)
+        history.append(dict(rec, values={"x": 0.020 + i * 1e-4}, n=i))
+    assert not got and "motion_summary" not in history[3]
+    assert classify_listed(history, lambda r: f"drifter {r['n']}") == 4
+    assert got == [(f"drifter {i}", MOTION_BLOWS, {"most_blows": MOTION_MOST_BLOWS}) for i in (0, 1, 3, 4)]
+    assert all(r["motion"] is _MOTION for r in history[1:6] if r["n"] != 2)
+    assert all(r["motion_summary"] == NOT_CLASSIFIED and "motion" not in r for r in history[6:])
+    assert classify_listed(history, lambda r: f"drifter {r['n']}") == 0 and len(got) == 4  # (done once)
+    table = failures_table(history, {"x": {"low": 0.02, "high": 0.023, "unit": "m"}}).splitlines()
+    assert table[1] == ("  x 20 mm: find_orbit found no periodic orbit of the drive with one impact per "
+                        "period; settles into a period-2 motion (2 blows per cycle, 0.1 % spread), no "
+                        "chatter, 50 Hz, 9 m/s")
+    assert table[3] == "  x 20.2 mm: the oil cavitates"
+    assert table[-1] == "  and 3 more (the JSON result's history)"
+    with pytest.raises(ValueError, match="record must be a design's without a one-impact orbit"):
+        classify_failed(history[3], "drifter 2")
+    with pytest.raises(ValueError, match="record must be a design's without a one-impact orbit"):
+        classify_failed(history[0], "a drifter")
+
+
+def test_the_search_classifies_no_motion_and_after_it_those_its_result_lists(monkeypatch, tmp_path):
+    """A search in which every design with its switch point past the start's (21.5 mm) has no orbit:
+    no motion from rest is run while it evaluates; after it, each design its table lists is
+    classified once, that design's own (its switch point), and the cache file keeps it."""
+    import importlib
+
+    from impactbar.physical import optimize_drifter
+
+    module = importlib.import_module("impactbar.physical.optimize_drifter")
+    evaluate, calls, got = module.evaluate_design, [0], []
+
+    def failing(drifter, *args, **kwargs):
+        calls[0] += 1
+        if drifter.si["switch_out_m"] > 0.0215 + 1e-9:
+            raise ValueError(_NO_ORBIT)
+        return evaluate(drifter, *args, **kwargs)
+
+    monkeypatch.setattr(module, "evaluate_design", failing)
+    monkeypatch.setattr(settle, "settle_point", lambda d, blows, **kw: got.append(
+        (calls[0], d.si["switch_out_m"])) or _MOTION)
+    cache = tmp_path / "cache.json"
+    res = optimize_drifter("circuit-drifter", {"valve.switch_out": ("19 mm", "24 mm")},
+                           objective="impact_power", max_evaluations=8, cache=cache, progress=False)
+    failed = [r for r in res.history if not r["ok"]]
+    assert len(failed) >= 2 and all(r["error"] == _NO_ORBIT for r in failed)
+    # every classification after the search's last evaluation (its designs evaluated, the start among them)
+    assert [n for n, _ in got] == [res.evaluations] * min(len(failed), 5)
+    assert [x for _, x in got] == [r["values"]["valve.switch_out"] for r in failed[:5]]
+    assert all(r["motion"] == _MOTION for r in failed[:5])
+    assert all(r["motion_summary"] == NOT_CLASSIFIED for r in failed[5:])
+    kept = {r["id"]: r for r in json.loads(cache.read_text())["evaluations"]}
+    assert all(kept[r["id"]]["motion"] == _MOTION for r in failed[:5])
+    assert "settles into a period-2 motion" in res.table()

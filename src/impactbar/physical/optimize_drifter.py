@@ -52,7 +52,7 @@ from .drifter import Drifter
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
-from .optimize_failures import failed_record
+from .optimize_failures import classify_listed, failed_record
 from .optimize_integers import integer_search
 from .optimize_multistart import check_multistart, multistart_search
 from .optimize_outputs import piston_and_multipliers, shank_stress
@@ -387,7 +387,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     chain.add(rid, orbit)
                 rec.update(piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-            rec = failed_record(exc, time.perf_counter() - t0, None if ideal else drifter)
+            rec = failed_record(exc, time.perf_counter() - t0, None if ideal else drifter, classify=False)
         rec.update(id=rid, values=values, changes=changes)
         store[rid] = rec
         history.append(rec)
@@ -468,6 +468,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         bar.finish()
     finally:
         bar.close()
+    # what the drill does at the designs without a one-impact orbit that the result lists (the search
+    # classified none: the motion from rest costs several evaluations)
+    if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)) and cache_path:
+        write_cache(cache_path, tag, store, stored_gradients)
     # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache; the best
     # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
     # some 1e-9 from the fresh one's, a design at an active limit on its other side)

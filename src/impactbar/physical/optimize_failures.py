@@ -6,13 +6,18 @@ from rest classified as a design map's ``settle`` task classifies it
 
 A design without a one-impact orbit costs about what one with an orbit costs: Newton's method gives
 up where its steps stall (:data:`~impactbar.drives.orbitproblem.STALL_STEPS`), so that the default
-chain's starts fail in a few steps each rather than in their fifty.
+chain's starts fail in a few steps each rather than in their fifty; and the search does not classify
+its motion (:data:`MOTION_MOST_BLOWS` blows from rest, several times the orbit's attempt): after the
+search the designs the result lists (:func:`failures_table`, the first :data:`FAILED_ROWS`) are
+classified (:func:`classify_listed`), the others' records say they are not
+(:data:`NOT_CLASSIFIED`), and :func:`classify_failed` classifies any of them on demand.
 """
 
 from __future__ import annotations
 
-__all__ = ["ERROR_CHARS", "MOTION_BLOWS", "MOTION_MOST_BLOWS", "FAILED_ROWS", "failed_record",
-           "motion_summary", "design_text", "failures_table"]
+__all__ = ["ERROR_CHARS", "MOTION_BLOWS", "MOTION_MOST_BLOWS", "FAILED_ROWS", "NOT_CLASSIFIED",
+           "failed_record", "classify_failed", "classify_listed", "listed_failures", "motion_summary",
+           "design_text", "failures_table"]
 
 #: The most characters of the error a failed design's record keeps (its first line): the default
 #: chain's list of the starts it tried, each with why it failed.
@@ -26,9 +31,12 @@ MOTION_MOST_BLOWS = 160
 #: The most designs without an operating point a result's table lists (the others counted; all in
 #: its JSON's ``history``)
 FAILED_ROWS = 5
+#: The ``motion_summary`` of a design without a one-impact orbit whose motion the search did not
+#: classify (it is not among the :data:`FAILED_ROWS` a result lists): :func:`classify_failed` does
+NOT_CLASSIFIED = "not classified: not reported (classify_failed classifies it)"
 
 
-def failed_record(exc: BaseException, seconds: float, drifter=None) -> dict:
+def failed_record(exc: BaseException, seconds: float, drifter=None, *, classify: bool = True) -> dict:
     r"""The record of a design without an operating point.
 
     Parameters
@@ -39,16 +47,19 @@ def failed_record(exc: BaseException, seconds: float, drifter=None) -> dict:
         The evaluation's wall time (s).
     drifter : CircuitDrifter, optional
         The design: where given and the error is that there is no periodic orbit, its motion from
-        rest is classified (:data:`MOTION_BLOWS` blows, up to :data:`MOTION_MOST_BLOWS` where that
-        cannot tell, :func:`~impactbar.physical.settle.settle_point`).
+        rest is classified (:func:`classify_failed`), or with ``classify=False`` the record says it
+        is not (:data:`NOT_CLASSIFIED`).
+    classify : bool
+        Whether to classify the motion here (``False``: the optimiser's search, which classifies
+        after it only the designs its result lists, :func:`classify_listed`).
 
     Returns
     -------
     dict
         ``ok`` and ``feasible`` ``False``, ``error`` (the first line of the message, at most
-        :data:`ERROR_CHARS` characters) and ``seconds``; with the classification ``motion`` (the
-        ``settle`` task's figures in SI, or ``{"error": ...}`` where the run is refused),
-        ``motion_summary`` (:func:`motion_summary`) and ``motion_seconds`` (its cost, s).
+        :data:`ERROR_CHARS` characters) and ``seconds``; with the classification ``motion``,
+        ``motion_summary`` and ``motion_seconds`` (:func:`classify_failed`), without it
+        ``motion_summary`` :data:`NOT_CLASSIFIED`.
 
     Examples
     --------
@@ -56,21 +67,123 @@ def failed_record(exc: BaseException, seconds: float, drifter=None) -> dict:
     >>> failed_record(ValueError("find_orbit: Newton stalled\nmore"), 1.25)
     {'ok': False, 'error': 'find_orbit: Newton stalled', 'feasible': False, 'seconds': 1.25}
     """
-    import time
-
     lines = str(exc).splitlines() or [type(exc).__name__]
     rec = {"ok": False, "error": lines[0][:ERROR_CHARS], "feasible": False, "seconds": float(seconds)}
-    if drifter is None or "no periodic orbit" not in rec["error"]:
+    if drifter is None or not _without_orbit(rec):
         return rec
+    if not classify:
+        rec["motion_summary"] = NOT_CLASSIFIED
+        return rec
+    return classify_failed(rec, drifter)
+
+
+def _without_orbit(record: dict) -> bool:
+    """Whether a record is a design's without a one-impact orbit (the only ones classified)."""
+    return not record.get("ok") and "no periodic orbit" in record.get("error", "")
+
+
+def classify_failed(record: dict, drifter) -> dict:
+    r"""What the drill does at a design without a one-impact orbit: its motion from rest over
+    :data:`MOTION_BLOWS` blows, up to :data:`MOTION_MOST_BLOWS` where that cannot tell, classified
+    as a design map's ``settle`` task classifies it (:func:`~impactbar.physical.settle.settle_point`;
+    theory §11, "Optimising a drifter"), written into its record.
+
+    Parameters
+    ----------
+    record : dict
+        The design's record (:func:`failed_record`'s, e.g. one of an optimiser result's ``history``
+        whose ``motion_summary`` is :data:`NOT_CLASSIFIED`); updated in place.
+    drifter : CircuitDrifter
+        The design (``build(with_values(config, record["changes"]), folder)``).
+
+    Returns
+    -------
+    dict
+        ``record``, with ``motion`` (the ``settle`` task's figures in SI, or ``{"error": ...}`` where
+        the run is refused: the oil cavitates), ``motion_summary`` (:func:`motion_summary`) and
+        ``motion_seconds`` (the classification's wall time, s).
+
+    Raises
+    ------
+    ValueError
+        ``record`` not a design's without a one-impact orbit (its error not "no periodic orbit").
+    """
+    import time
+
     from .settle import settle_point
 
+    if not (isinstance(record, dict) and _without_orbit(record)):
+        raise ValueError("record must be a design's without a one-impact orbit (ok false, its error "
+                         "'... no periodic orbit ...')")
     t0 = time.perf_counter()
     try:
         motion = settle_point(drifter, MOTION_BLOWS, most_blows=MOTION_MOST_BLOWS)
     except ValueError as err:  # (the oil cavitates during the run)
         motion = {"error": str(err).splitlines()[0][:ERROR_CHARS]}
-    rec.update(motion=motion, motion_summary=motion_summary(motion), motion_seconds=time.perf_counter() - t0)
-    return rec
+    record.update(motion=motion, motion_summary=motion_summary(motion),
+                  motion_seconds=time.perf_counter() - t0)
+    return record
+
+
+def listed_failures(history: list, most: int = FAILED_ROWS) -> list:
+    """The designs without an operating point a result's table lists (:func:`failures_table`): the
+    first ``most`` of ``history``'s.
+
+    Parameters
+    ----------
+    history : list of dict
+        The designs' records in the order evaluated.
+    most : int
+        The most designs listed, at least 0.
+
+    Returns
+    -------
+    list of dict
+        The records, in their order.
+
+    Raises
+    ------
+    ValueError
+        ``most`` not an integer at least 0.
+
+    Examples
+    --------
+    >>> listed_failures([{"ok": True}, {"ok": False, "id": "a"}, {"ok": False, "id": "b"}], 1)
+    [{'ok': False, 'id': 'a'}]
+    """
+    if not (isinstance(most, int) and most >= 0):
+        raise ValueError(f"most must be an integer at least 0; got {most!r}")
+    return [r for r in history if not r.get("ok")][:most]
+
+
+def classify_listed(history: list, drifter_of, most: int = FAILED_ROWS) -> int:
+    r"""The motions of the designs without a one-impact orbit that a result lists
+    (:func:`listed_failures`) classified where the search left them unclassified
+    (:data:`NOT_CLASSIFIED`; :func:`classify_failed`, theory §11).
+
+    Parameters
+    ----------
+    history : list of dict
+        The designs' records in the order evaluated; those classified are updated in place.
+    drifter_of : callable
+        ``drifter_of(record)``: the design of a record (its ``changes`` built).
+    most : int
+        The most designs listed, at least 0.
+
+    Returns
+    -------
+    int
+        How many were classified.
+
+    Raises
+    ------
+    ValueError
+        ``most`` negative.
+    """
+    todo = [r for r in listed_failures(history, most) if r.get("motion_summary") == NOT_CLASSIFIED]
+    for r in todo:
+        classify_failed(r, drifter_of(r))
+    return len(todo)
 
 
 def motion_summary(motion: dict) -> str:
@@ -163,8 +276,7 @@ def failures_table(history: list, vary: dict, most: int = FAILED_ROWS) -> str:
     1 of 2 designs without an operating point (0.5 s + 1 s classifying their motion; 0.25 s one with):
       x 21 mm: find_orbit found no periodic orbit; settles into a period-2 motion
     """
-    if not (isinstance(most, int) and most >= 0):
-        raise ValueError(f"most must be an integer at least 0; got {most!r}")
+    listed = listed_failures(history, most)
     failed = [r for r in history if not r.get("ok")]
     if not failed:
         return ""
@@ -174,7 +286,7 @@ def failures_table(history: list, vary: dict, most: int = FAILED_ROWS) -> str:
     against = f"; {sum(ok) / len(ok):.3g} s one with" if ok else ""
     rows = [f"{len(failed)} of {len(history)} designs without an operating point ({cost:.3g} s + "
             f"{motion:.3g} s classifying their motion{against}):"]
-    for r in failed[:most]:
+    for r in listed:
         why, _, _ = r["error"].partition("; ")
         said = f"; {r['motion_summary']}" if "motion_summary" in r else ""
         rows.append(f"  {design_text(r['values'], vary) if 'values' in r else 'a design'}: {why}{said}")

@@ -371,14 +371,15 @@ def check_start(record: dict, any_start: bool) -> dict:
 
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
-    """A design's record by a fresh ``orbit()`` (a worker's task in the population search)."""
+    """A design's record by a fresh ``orbit()`` (a worker's task in the population search); a design
+    without a one-impact orbit not classified (the search classifies those its result lists)."""
     t0, drifter = time.perf_counter(), None
     try:
         drifter = build(with_values(config, changes), folder)
         rec, orbit = evaluate_design(drifter, limits)
         rec.update(piston_and_multipliers(drifter, orbit))
     except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-        rec = failed_record(exc, time.perf_counter() - t0, drifter)
+        rec = failed_record(exc, time.perf_counter() - t0, drifter, classify=False)
     return rec
 
 
