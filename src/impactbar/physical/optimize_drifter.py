@@ -14,6 +14,9 @@ the constraints by the implicit function theorem on each design's orbit
 solved), a key across a border within the step by central differences of orbits continued from the
 design's instead.
 The reported optimum is the best feasible design evaluated, re-evaluated by a fresh ``orbit()``.
+What the drill does at a design without a one-impact orbit (its motion from rest classified) is
+found after the search, for the designs the result lists alone
+(:func:`~impactbar.physical.optimize_failures.classify_listed`).
 
 The circuit's ideal limit (``impact_velocity=``): each design is its piston's single blow on the rod
 and rock at a given impact velocity, the circuit taken to deliver the piston at it and to cost

@@ -62,7 +62,10 @@ class DrifterOptimum:
     seconds : float
         Wall time of the run (s).
     history : list of dict
-        Every design's record in the order evaluated.
+        Every design's record in the order evaluated; of the designs without a one-impact orbit,
+        those the table lists have their motion classified, the others' records say they have not
+        (:data:`~impactbar.physical.optimize_failures.NOT_CLASSIFIED`;
+        :func:`~impactbar.physical.optimize_failures.classify_failed` classifies one).
     message : str
         The optimiser's.
     certificate : OptimalityCertificate
