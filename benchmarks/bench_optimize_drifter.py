@@ -22,9 +22,9 @@ prints side by side the designs evaluated (and continued from a neighbour), thos
 point and the CPU seconds they cost (the evaluations that raised and their records' classification,
 timed in the search's process; a sample's designs on workers by their records' seconds), apart the
 classification after the search of the designs the result lists (a tree that classifies none in
-the search), all designs' CPU seconds, the wall and CPU time of the call, the certificate's verdict and KKT residual (``none``
-on a tree without one) and the gain, e.g. ``--against 15d5b20`` (before the certificate, the stall
-test and the failures' classification).
+the search), all designs' CPU seconds, the wall and CPU time of the call, the certificate's verdict
+and KKT residual (``none`` on a tree without one) and the gain, e.g. ``--against 15d5b20`` (before
+the certificate, the stall test and the failures' classification).
 """
 
 from __future__ import annotations
