@@ -177,3 +177,17 @@ def test_an_old_cache_reads_its_records_under_the_names_now(tmp_path):
         (record,) = read_cache(path, "t").values()
     assert record["objectives"] == {"efficiency": 0.8, "work_on_rock_J": 200.0}
     assert list(record["constraints"]) == ["peak_rod_stress"]
+
+
+def test_a_constraint_given_by_its_old_name_limits_the_output():
+    from pathlib import Path
+
+    from impactbar.physical import build, read_config
+    from impactbar.physical.optimize_problem import _limits
+
+    cfg, folder = read_config(str(Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"))
+    drifter = build(cfg, folder)
+    with pytest.warns(DeprecationWarning, match="'peak_incident_stress' is now called 'peak_rod_stress'"):
+        old = _limits({"peak_incident_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}, drifter)
+    assert old == _limits({"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}, drifter)
+    assert old["peak_rod_stress"] == 250e6

@@ -431,9 +431,22 @@ def current_name(name: str, what: str = "output") -> str:
 
 
 def current_keys(record: dict, what: str = "key") -> dict:
-    """``record`` (a stored record's figures, a store's variables by name) with each old name or key
-    (:data:`RENAMED`) replaced by its name now (:func:`current_name`: a ``DeprecationWarning`` each);
-    the same object where none is old."""
+    """A record read back with the outputs' names now.
+
+    Parameters
+    ----------
+    record : dict
+        Figures or limits by name or key (a stored record's, a user's constraints).
+    what : str
+        What the keys are, for the warning.
+
+    Returns
+    -------
+    dict
+        ``record`` with each old name or key (:data:`RENAMED`) replaced by the name now
+        (:func:`current_name`: a ``DeprecationWarning`` each), in its order; ``record`` itself where
+        none is old.
+    """
     if not any(_old_stem(k) for k in record):
         return record
     return {current_name(k, what): v for k, v in record.items()}
