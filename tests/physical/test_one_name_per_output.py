@@ -191,3 +191,15 @@ def test_a_constraint_given_by_its_old_name_limits_the_output():
         old = _limits({"peak_incident_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}, drifter)
     assert old == _limits({"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}, drifter)
     assert old["peak_rod_stress"] == 250e6
+
+
+def test_the_valve_drifters_old_power_reads_the_impact_power():
+    """The valve drifter's ``percussive_power_kW`` was the circuit drifter's ``impact_power_kW`` (the
+    kinetic energy at impact times the blow frequency): one name now, the old one a warning."""
+    from impactbar.physical import drifter_preset
+
+    o = drifter_preset("hydraulic-drifter").orbit()
+    assert o.impact_power_kW == o.impact_energy_J * o.blow_frequency_Hz / 1e3
+    assert "impact_power_kW" in o.summary() and "percussive_power_kW" not in o.summary()
+    with pytest.warns(DeprecationWarning, match="percussive_power_kW is now called impact_power_kW"):
+        assert o.percussive_power_kW == o.impact_power_kW
