@@ -56,7 +56,7 @@ VARY = {
 FOUR = ("piston.collar_diameter", "piston.front_rod_diameter", "piston.rear_rod_diameter", "valve.switch_out")
 #: ``--quick``: the switch point and the pre-charge.
 QUICK = ("valve.switch_out", "accumulator.precharge")
-CONSTRAINTS = {"peak_incident_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}
+CONSTRAINTS = {"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}
 
 
 def _multistart_summary(res) -> None:

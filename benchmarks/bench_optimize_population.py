@@ -35,7 +35,7 @@ def main() -> None:
     if args.rock:
         config, vary, objective, workers_list = ROCK, {"piston.collar_diameter": ("48 mm", "50 mm")}, \
             "drilling_rate_per_kW", (None, 2)
-        constraints = {"peak_incident_stress": "260 MPa"}
+        constraints = {"peak_rod_stress": "260 MPa"}
     else:
         config, vary, objective, constraints, workers_list = "circuit-drifter", VARY, "impact_power", None, \
             (None, 1, 2)

@@ -48,7 +48,7 @@ def test_orbits_json_of_a_drifter(source, tmp_path, capsys):
     v, f = _expected()
     assert doc["orbit"]["impact_velocity_m_s"] == pytest.approx(v, rel=1e-7)
     assert doc["orbit"]["blow_frequency_Hz"] == pytest.approx(f, rel=1e-7)
-    assert doc["orbit"]["percussive_power_kW"] == pytest.approx(0.5 * 5.6 * v * v * f / 1e3, rel=1e-6)
+    assert doc["orbit"]["impact_power_kW"] == pytest.approx(0.5 * 5.6 * v * v * f / 1e3, rel=1e-6)
 
 
 def test_simulate_and_continue_a_drifter(tmp_path, capsys):

@@ -271,7 +271,7 @@ def test_the_certificate_s_gradients_refine_their_step_at_a_border():
     keys = list(spec)
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - lo[j] for j, k in enumerate(keys)])
-    limits = _limits({"peak_incident_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"},
+    limits = _limits({"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"},
                      build(cfg, folder), ideal=False)
     kept = dict.fromkeys(DEFAULT_CONSTRAINTS) | limits
     units = {k: spec[k]["unit"] for k in keys}

@@ -184,7 +184,7 @@ def test_plot_draws_the_pistons_and_multipliers(tmp_path):
 @pytest.mark.slow
 def test_rock_problem_one_variable_reevaluated_fresh():
     vary = {"piston.collar_diameter": ("48 mm", "50 mm")}
-    res = optimize_drifter(PISTON_EXAMPLE, vary, constraints={"peak_incident_stress": "260 MPa"},
+    res = optimize_drifter(PISTON_EXAMPLE, vary, constraints={"peak_rod_stress": "260 MPa"},
                            max_evaluations=3, progress=False)
     d, o = _fresh_figures(read_config(PISTON_EXAMPLE)[0], res.optimum["changes"])
     rock = o.rock()

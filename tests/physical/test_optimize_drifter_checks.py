@@ -117,7 +117,7 @@ def test_every_reported_figure_has_its_sign_and_size():
         assert mu.max() == pytest.approx(rec["constraints"]["max_multiplier"]["value"], rel=1e-12)
 
 
-@pytest.mark.parametrize("name", ["peak_incident_stress", "min_drilling_rate"])
+@pytest.mark.parametrize("name", ["peak_rod_stress", "min_drilling_rate"])
 def test_a_rock_constraint_without_rock_is_refused_in_one_line(name):
     """Without a drill string the rock's figures are not computed: a limit on one is refused up front
     (it was reported as an infeasible start missing its limit by nan)."""
@@ -190,8 +190,8 @@ def test_ideal_limit_optimum_is_optimize_pistons():
                                max_evaluations=150,
                                tol=1e-5, progress=False)
     gain = heavier.optimum["objectives"]["work_on_rock_J"] - work
-    assert gain == pytest.approx(opt["objectives"]["blow_efficiency"] * 0.1 * V * V / 2, rel=0.2)
-    predicted = opt["objectives"]["blow_efficiency"] * 0.1 * V * V / 2
+    assert gain == pytest.approx(opt["objectives"]["efficiency"] * 0.1 * V * V / 2, rel=0.2)
+    predicted = opt["objectives"]["efficiency"] * 0.1 * V * V / 2
     _docs_say(f"0.1 kg more of mass gives {gain:.2f} J more work per blow",
               f"of the energy added, {predicted:.2f} J, within 20 %")
 
@@ -227,9 +227,9 @@ def test_ideal_limit_refuses_what_it_does_not_compute():
         with pytest.raises(ValueError, match=match) as info:
             optimize_drifter(cfg, vary, progress=False, **args)
         assert "\n" not in str(info.value)
-    rec = evaluate_blow(build(cfg), V, {"peak_incident_stress": "300 MPa"})
-    assert set(rec["constraints"]) == {"peak_incident_stress"}
-    assert 0.0 < rec["objectives"]["blow_efficiency"] < 1.0
+    rec = evaluate_blow(build(cfg), V, {"peak_rod_stress": "300 MPa"})
+    assert set(rec["constraints"]) == {"peak_rod_stress"}
+    assert 0.0 < rec["objectives"]["efficiency"] < 1.0
     energy = 0.5 * build(cfg).bar.mass_kg * V * V
     assert rec["objectives"]["impact_energy_J"] == pytest.approx(energy, rel=1e-12)
 

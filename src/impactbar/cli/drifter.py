@@ -37,7 +37,7 @@ def add_parser(sub) -> None:
         "circuit (a [chambers] section: chambers, pump, accumulator, relief, theory section 11). "
         "Prints the blow frequency, impact velocity and energy, and, with the circuit, the impact "
         "power, mean supply pressure, pump power, hydraulic efficiency (the energy the blows deliver "
-        "over the pump's work), least pressure, stability, and whether the relief valve opens and the "
+        "over the pump's work), minimum pressure, stability, and whether the relief valve opens and the "
         "accumulator empties. "
         "'impactbar continue CONFIG --parameter accumulator.precharge --to \"12 MPa\"' follows it.")
     p = sub.add_parser(
@@ -151,20 +151,18 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
     return _print_orbit(args, drifter, _circuit_header, _circuit_line)
 
 
-def _said(s: dict, name: str, words: str = "", fmt: str = ".4g") -> str:
-    """``"words value unit"``: the output ``name``'s value in the summary ``s`` (an operating point's or
+def _said(s: dict, name: str, named: bool = True, fmt: str = ".4g") -> str:
+    """``"name value unit"``: the output ``name``'s value in the summary ``s`` (an operating point's or
     a run's), under its key and in its display unit as the registry (:mod:`~impactbar.physical.outputs`)
-    declares them."""
+    declares them, after its name in words where ``named`` (``mean supply pressure``)."""
     o = OUTPUTS[name]
     unit = "" if o.shown_unit in ("", "1") else f" {o.shown_unit}"
-    return f"{words} " * bool(words) + f"{s[o.shown_key]:{fmt}}{unit}"
+    return f"{o.name.replace('_', ' ')} " * named + f"{s[o.shown_key]:{fmt}}{unit}"
 
 
 def _motion(s: dict) -> str:
     """The blows' frequency, velocity and energy: the line's start for both drifters."""
-    return ", ".join([_said(s, "blow_frequency", "blow frequency"),
-                      _said(s, "impact_velocity", "impact velocity"),
-                      _said(s, "impact_energy", "impact energy")])
+    return ", ".join([_said(s, "blow_frequency"), _said(s, "impact_velocity"), _said(s, "impact_energy")])
 
 
 def _stability(s: dict) -> str:
@@ -173,12 +171,10 @@ def _stability(s: dict) -> str:
 
 
 def _circuit_line(s: dict) -> str:
-    return (f"  {_motion(s)}, {_said(s, 'impact_power', 'impact power')}, "
-            f"{_said(s, 'mean_supply_pressure', 'mean supply pressure')}, "
-            f"{_said(s, 'pump_power', 'pump power')}, "
-            f"{_said(s, 'hydraulic_efficiency', 'hydraulic efficiency', '.3f')} "
+    return (f"  {_motion(s)}, {_said(s, 'impact_power')}, {_said(s, 'mean_supply_pressure')}, "
+            f"{_said(s, 'pump_power')}, {_said(s, 'hydraulic_efficiency', fmt='.3f')} "
             "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), "
-            f"{_said(s, 'minimum_pressure', 'least pressure')}"
+            f"{_said(s, 'minimum_pressure')}"
             + (" (cavitates)" if s["cavitates"] else "")
             + f", {_stability(s)}\n"
             + f"  {_borders_line(s)}" + _added_line(s))
@@ -236,10 +232,9 @@ def _print_orbit(args, drifter, header, line) -> int:
 
 
 def _print_rock(r: dict) -> None:
-    print(f"  per blow: {_said(r, 'work_on_rock', 'work on rock')}, "
-          f"{_said(r, 'penetration', 'penetration')}, "
-          f"efficiency {r['efficiency']:.3f} ({r['efficiency_with_rebound']:.3f} with the rebound "
-          f"credited); {_said(r, 'drilling_rate', 'drilling rate')}")
+    print(f"  per blow: {_said(r, 'work_on_rock')}, {_said(r, 'penetration')}, "
+          f"{_said(r, 'efficiency', fmt='.3f')} ({r['efficiency_with_rebound']:.3f} with the rebound "
+          f"credited); {_said(r, 'drilling_rate')}")
 
 
 def _header(d: physical.Drifter) -> str:
@@ -262,7 +257,7 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
 
 
 def _line(s: dict) -> str:
-    return (f"  {_motion(s)}, {_said(s, 'percussive_power', 'percussive power')}, {s['admissibility']}, "
+    return (f"  {_motion(s)}, {_said(s, 'impact_power')}, {s['admissibility']}, "
             f"{_stability(s)}")
 
 
@@ -284,10 +279,10 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
     written = _drifter_figures(drifter, tr, out)
     print(f"{drifter.name or 'drifter'}: {tr.n_impacts} impacts in {tr.t_end / om:.4g} s; second half: "
-          f"{_said(s, 'blow_frequency')}, {_said(s, 'impact_velocity')}, "
-          f"{_said(s, 'impact_energy')} per blow, {_said(s, 'percussive_power')}"
-          + (f"; on rock {_said(s, 'work_on_rock')} and {_said(s, 'penetration')} per blow, "
-             f"{_said(s, 'drilling_rate')}" if OUTPUTS["drilling_rate"].shown_key in s else "")
+          f"{_said(s, 'blow_frequency', False)}, {_said(s, 'impact_velocity', False)}, "
+          f"{_said(s, 'impact_energy', False)} per blow, {_said(s, 'impact_power', False)}"
+          + (f"; on rock {_said(s, 'work_on_rock', False)} and {_said(s, 'penetration', False)} per blow, "
+             f"{_said(s, 'drilling_rate', False)}" if OUTPUTS["drilling_rate"].shown_key in s else "")
           + f"; wrote {out}/{written}, impacts.csv, summary.json")
     return 0
 

@@ -39,14 +39,14 @@ def add_parser(sub) -> None:
     p.add_argument("--objective", default="drilling_rate_per_kW", choices=list(OBJECTIVES),
                    help="what is maximised (default drilling_rate_per_kW)")
     p.add_argument("--constraint", action="append", default=[], metavar="NAME=VALUE",
-                   help="a constraint's limit with its unit, e.g. 'peak_incident_stress=250 MPa' or "
+                   help="a constraint's limit with its unit, e.g. 'peak_rod_stress=250 MPa' or "
                         "max_multiplier=0.9, or NAME=none to drop one; names: "
                         f"{', '.join(DEFAULT_CONSTRAINTS)}, or any output's name (at most the limit; "
                         "min_NAME: at least), e.g. 'min_blow_frequency=50 Hz'")
     p.add_argument("--impact-velocity", default=None, metavar="SPEED",
                    help="the circuit's ideal limit: each design its piston's blow on the rod and rock at "
                         "this impact velocity, e.g. '10 m/s' (objective work_on_rock_per_blow; constraints "
-                        "peak_incident_stress and piston_mass)")
+                        "peak_rod_stress and piston_mass)")
     p.add_argument("--max-evaluations", type=int, default=60,
                    help="the most designs the search evaluates (default 60)")
     p.add_argument("--method", default="cobyla",
@@ -158,7 +158,7 @@ def parse_constraint(items) -> dict:
         name, eq, value = item.partition("=")
         name, v = name.strip(), value.strip()
         if not (eq and name and v):
-            raise ValueError("--constraint must be NAME=VALUE, e.g. 'peak_incident_stress=250 MPa'; got "
+            raise ValueError("--constraint must be NAME=VALUE, e.g. 'peak_rod_stress=250 MPa'; got "
                              f"{item!r}")
         number = re.match(r"[+-]?(?:inf(?:inity)?|nan|(?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?)", v, re.IGNORECASE)
         if number is not None and not math.isfinite(float(number.group(0))):

@@ -48,7 +48,7 @@ ORBIT_FIELDS = Schema(
           views={_ONE, "table"}),
     Field("impact_velocity", "velocity of the struck end before impact", views={
           _ONE, "table", "sweep", "si", "cli"}, label="impact vel.", fmt=".6f",
-          si=SI("impact_velocity_m_s", "m/s", "velocity_m_s", "impact velocity", "v/(m/s)", ".3f")),
+          si=SI("impact_velocity_m_s", "m/s", "velocity_m_s", None, "v/(m/s)", ".3f")),
     Field("impact_velocities", "velocity of the struck end before each impact", per="impact",
           element="impact_velocity", views={"dict", "branch", "repr"}, fmt=".6g"),
     Field("admissible", "the end stays off the stop between impacts (theory §5)", "", dtype="b1",
@@ -58,9 +58,10 @@ ORBIT_FIELDS = Schema(
     Field("clearance", "largest u(1, t) at a stationary point between impacts",
           views={"dict", _ONE, "table", "branch", "cli"}, fmt=".3e"),
     Field("clearance_error", "bound on the error of clearance", views={"table"}),
-    Field("stable", "admissible and every |Floquet multiplier| < 1 (theory §7)", "", dtype="b1",
+    Field("stable", "admissible and every non-trivial |Floquet multiplier| below 1, theory §7", "",
+          dtype="b1",
           views={"dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr"}),
-    Field("max_abs_multiplier", "largest |Floquet multiplier|", views={
+    Field("max_abs_multiplier", "largest non-trivial |Floquet multiplier|", views={
           "dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr"}, label="max|mu|", fmt=".5f"),
     Field("multipliers", "Floquet multipliers, by decreasing modulus", dtype="c16", per="multiplier",
           element="multiplier", views={"dict", _ONE, "branch"}),
@@ -74,8 +75,9 @@ ORBIT_FIELDS = Schema(
     Field("peak_force", "peak contact force", attr="impact.peak_force", views={_ONE}, optional=True),
     Field("peak_rod_stress", "peak compressive stress of the transmitted wave",
           attr="impact.peak_rod_stress", views={_ONE}, optional=True),
-    Field("efficiency", "rod energy over the energy available to the blow",
-          attr="impact.efficiency", views={_ONE}, optional=True),
+    Field("efficiency", "energy the blow delivers over the energy available to it: work on the rock with "
+                        "one, else the energy carried into the rod", attr="impact.efficiency", views={_ONE},
+          optional=True),
     Field("advance", "advance of the rod end per blow", attr="impact.advance", views={_ONE},
           optional=True),
 )

@@ -579,11 +579,6 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return {name: float(z[o.drive.layout[name]]) for name in ("front", "rear", "supply")}
 
     @property
-    def impact_power_kW(self) -> float:
-        """The kinetic energy at impact times the blow frequency (kW): :attr:`percussive_power_kW`."""
-        return self.percussive_power_kW
-
-    @property
     def hydraulic_efficiency(self) -> float:
         """The energy the blows deliver (the piston's kinetic energy before the impacts less after
         them) per second over :attr:`pump_power_kW`: a fraction of the hydraulic power, below 1."""

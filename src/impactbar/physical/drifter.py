@@ -12,7 +12,7 @@ that the dimensionless stroke force is 1; ``ret`` :math:`= A_r / A_s`, ``switch_
 :math:`= x_1 / L`, ``delay`` :math:`= \Omega \tau`, :math:`s = c / (L \Omega)`,
 :math:`d = D / (M \Omega)`. Outputs: blow frequency :math:`n \Omega / T` (Hz, :math:`n` impacts a
 period :math:`T`), impact velocity :math:`L \Omega v` (m/s), impact energy :math:`m L^2 \Omega^2 e`
-(J, :math:`e` the dimensionless kinetic energy of the bar arriving at the stop), percussive power
+(J, :math:`e` the dimensionless kinetic energy of the bar arriving at the stop), impact power
 (energy times blow frequency, kW).
 
 Configuration keys (a nested ``dict`` or TOML, as :meth:`Drifter.from_config` reads them)::
@@ -256,7 +256,7 @@ class Drifter(_ScaledDrifter):
         (:func:`impactbar.simulate`); returns the :class:`~impactbar.DrivenTrajectory` and a
         dict of SI summaries over the last half of the run: ``blows``, ``blow_frequency_Hz``,
         ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, :math:`m v^2 / 2` of the rigid
-        mode's arrival), ``percussive_power_kW``; with a drill string also the means per blow of
+        mode's arrival), ``impact_power_kW``; with a drill string also the means per blow of
         ``work_on_rock_J``, ``penetration_mm`` and ``efficiency``, and ``drilling_rate_m_min``
         (the mean penetration times the blow frequency): each output's under its key and in its display
         unit as the registry declares them (:mod:`~impactbar.physical.outputs`)."""
@@ -276,7 +276,7 @@ class Drifter(_ScaledDrifter):
         f = (n - 1) / float(t[late][-1] - t[late][0]) if n > 1 else math.nan
         e = 0.5 * self.bar.mass_kg * float((v * v).mean()) if n else math.nan
         out = {"blows": n, **figures(blow_frequency=f, impact_velocity=float(v.mean()) if n else math.nan,
-                                     impact_energy=e, percussive_power=e * f / 1e3)}
+                                     impact_energy=e, impact_power=e * f / 1e3)}
         pieces = tr.pieces if self.drill is not None else ()
         recs = [r for i in range(len(pieces)) for r in getattr(pieces[i], "impacts", ())]
         if recs and len(recs) == late.size:  # with a drill string: the blows' records, one per impact
@@ -288,9 +288,9 @@ class Drifter(_ScaledDrifter):
             def mean(x):
                 return float(np.mean(x)) if x else math.nan
 
-            out.update(figures(work_on_rock=mean(work), penetration=1e3 * mean(pen)))
-            out["efficiency"] = mean([float(r.efficiency) for r in late_recs])
-            out.update(figures(drilling_rate=mean(pen) * f * 60.0))
+            out.update(figures(work_on_rock=mean(work), penetration=1e3 * mean(pen),
+                               efficiency=mean([float(r.efficiency) for r in late_recs]),
+                               drilling_rate=mean(pen) * f * 60.0))
         return tr, out
 
     @classmethod
@@ -360,9 +360,17 @@ class DrifterOrbit:
         return float(d.bar.mass_kg * (d.bar.length_m * d.omega_rad_s) ** 2 * self.orbit.impact_energy)
 
     @property
-    def percussive_power_kW(self) -> float:
-        """Impact energy times blow frequency (kW)."""
+    def impact_power_kW(self) -> float:
+        """The kinetic energy at impact times the blow frequency (kW)."""
         return self.impact_energy_J * self.blow_frequency_Hz / 1e3
+
+    @property
+    def percussive_power_kW(self) -> float:
+        """:attr:`impact_power_kW` under the name it had before (a ``DeprecationWarning``)."""
+        import warnings
+
+        warnings.warn("percussive_power_kW is now called impact_power_kW", DeprecationWarning, stacklevel=2)
+        return self.impact_power_kW
 
     @property
     def multipliers(self) -> np.ndarray:

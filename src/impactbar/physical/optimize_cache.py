@@ -23,14 +23,26 @@ __all__ = ["read_cache", "read_gradients", "write_cache", "dumps", "OrbitChain"]
 
 def read_cache(path, tag: str) -> dict:
     """The designs a cache file holds for the problem ``tag`` by id (``{}``: no file, or another
-    problem's).
+    problem's); a figure or constraint stored under a name its output had before is read under the
+    name now, with a ``DeprecationWarning``.
 
     Raises
     ------
     ValueError
         A file that is not readable JSON, in one line.
     """
-    return {r["id"]: r for r in _document(path, tag).get("evaluations", [])}
+    return {r["id"]: _current(r) for r in _document(path, tag).get("evaluations", [])}
+
+
+def _current(record: dict) -> dict:
+    """A stored design's record with its figures and constraints under the outputs' names now
+    (a name an output had before: :data:`~impactbar.physical.outputs.RENAMED`, a ``DeprecationWarning``)."""
+    from .outputs import current_keys
+
+    for part in ("objectives", "constraints"):
+        if isinstance(record.get(part), dict):
+            record[part] = current_keys(record[part], f"cached {part[:-1]}")
+    return record
 
 
 def read_gradients(path, tag: str) -> dict:

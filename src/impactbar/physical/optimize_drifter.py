@@ -143,7 +143,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         ``"drilling_rate"``.
     constraints : dict, optional
         Limits of :data:`DEFAULT_CONSTRAINTS` (with units or SI; ``None`` drops one), e.g.
-        ``{"peak_incident_stress": "260 MPa"}``; a valve drifter's are those of its outputs
+        ``{"peak_rod_stress": "260 MPa"}``; a valve drifter's are those of its outputs
         (:func:`~impactbar.physical.optimize_problem.default_constraints`: no oil's).
     max_evaluations : int
         The most designs the search evaluates (besides the baseline's and the optimum's fresh

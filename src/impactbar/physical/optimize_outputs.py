@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .outputs import OUTPUTS
+from .outputs import OUTPUTS, current_name
 
 __all__ = ["constraint_output", "piston_and_multipliers", "shank_stress"]
 
@@ -17,7 +17,7 @@ __all__ = ["constraint_output", "piston_and_multipliers", "shank_stress"]
 #: constraint's), its sense (+1: the value at most the limit; -1: at least) and the scale of its
 #: normalised margin for the search (``None``: the limit's size). Any other output is a constraint
 #: too: by its name at most the limit, ``min_<name>`` at least (:func:`constraint_output`).
-_CONSTRAINTS = {"peak_incident_stress": ("peak_incident_stress", 1, None),
+_CONSTRAINTS = {"peak_rod_stress": ("peak_rod_stress", 1, None),
                 "max_multiplier": ("max_abs_multiplier", 1, 1.0),
                 "min_pressure": ("minimum_pressure", -1, 1e6),
                 "mean_supply_pressure": ("mean_supply_pressure", 1, None),
@@ -53,6 +53,7 @@ def constraint_output(name: str, kind: str = "circuit") -> _Constrained | None:
     >>> constraint_output("min_pressure", "drifter") is None  # (no oil)
     True
     """
+    name = current_name(name, "constraint")  # (an old name: a DeprecationWarning)
     if name in _CONSTRAINTS:
         out, sense, scale = _CONSTRAINTS[name]
     else:

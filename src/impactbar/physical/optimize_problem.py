@@ -28,7 +28,7 @@ from .display_units import config_quantity, display_unit
 from .loader import build, with_values
 from .optimize_failures import failed_record
 from .optimize_outputs import constraint_output, piston_and_multipliers
-from .outputs import Reading, outputs
+from .outputs import Reading, current_keys, outputs
 from .sensitivity import default_step, tangent_derivatives
 from .units import to_si
 
@@ -64,7 +64,7 @@ def objectives(kind: str = "circuit", rock: bool = True) -> dict:
     --------
     >>> from impactbar.physical.optimize_problem import objectives
     >>> [(k, o.key) for k, o in objectives("drifter").items()]  # doctest: +NORMALIZE_WHITESPACE
-    [('impact_power', 'percussive_power_kW'), ('work_on_rock_per_blow', 'work_on_rock_J'),
+    [('impact_power', 'impact_power_kW'), ('work_on_rock_per_blow', 'work_on_rock_J'),
      ('drilling_rate', 'drilling_rate_m_min')]
     """
     return {o.objective: _Objective(o.key, o.unit, o.long_name) for o in outputs("record", kind, rock)
@@ -74,7 +74,7 @@ def objectives(kind: str = "circuit", rock: bool = True) -> dict:
 #: The objectives of a drifter with its oil circuit (:func:`objectives`).
 OBJECTIVES = objectives()
 
-#: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
+#: The constraints and their default limits (SI): ``peak_rod_stress`` (Pa, the largest stress in
 #: the shank adapter before the rock's first reflection is back at it, or over the piston's first
 #: contact where that lasts longer: the peak of the incident wave; ``None``: not constrained),
 #: ``max_multiplier`` (the largest Floquet multiplier's modulus), ``min_pressure`` (Pa absolute: no
@@ -84,13 +84,13 @@ OBJECTIVES = objectives()
 #: over the period must lie above it), ``min_drilling_rate`` (m/min; ``None``: not constrained; a
 #: design that drills per kilowatt more by drilling slower is then kept from the optimum),
 #: ``piston_mass`` (kg, the piston's mass at most; ``None``: not constrained).
-DEFAULT_CONSTRAINTS = {"peak_incident_stress": None, "max_multiplier": 0.95, "min_pressure": 0.0,
+DEFAULT_CONSTRAINTS = {"peak_rod_stress": None, "max_multiplier": 0.95, "min_pressure": 0.0,
                        "mean_supply_pressure": "relief", "peak_supply_pressure": None,
                        "min_chamber_volume": 0.0, "min_drilling_rate": None, "piston_mass": None}
 
 #: The constraints of the circuit's ideal limit (``optimize_drifter(..., impact_velocity=...)``): the
 #: blow's and the piston's.
-IDEAL_CONSTRAINTS = ("peak_incident_stress", "piston_mass")
+IDEAL_CONSTRAINTS = ("peak_rod_stress", "piston_mass")
 
 #: How far a constraint may be missed and count as met, relative to its scale (the limit, or where
 #: the limit is 0 the margin's fixed scale: 1 MPa of pressure, 0.1 L of volume): the operating
@@ -115,7 +115,7 @@ def default_constraints(kind: str = "circuit") -> dict:
     --------
     >>> from impactbar.physical.optimize_problem import default_constraints
     >>> default_constraints("drifter")
-    {'peak_incident_stress': None, 'max_multiplier': 0.95, 'min_drilling_rate': None, 'piston_mass': None}
+    {'peak_rod_stress': None, 'max_multiplier': 0.95, 'min_drilling_rate': None, 'piston_mass': None}
     """
     return {k: v for k, v in DEFAULT_CONSTRAINTS.items() if constraint_output(k, kind) is not None}
 
@@ -206,7 +206,7 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
     -------
     dict
         As :func:`evaluate_design`'s: ``objectives`` (``work_on_rock_J``, ``impact_energy_J``,
-        ``blow_efficiency``), ``constraints``, ``feasible``, ``seconds``.
+        ``efficiency``), ``constraints``, ``feasible``, ``seconds``.
 
     Raises
     ------
@@ -245,7 +245,7 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
 def _limits(constraints, drifter, ideal: bool = False) -> dict:
     if constraints is not None and not isinstance(constraints, dict):
         raise ValueError(f"constraints must be a dict of limits or None; got {constraints!r}")
-    given = dict(constraints or {})
+    given = current_keys(dict(constraints or {}), "constraint")  # (an old name: a DeprecationWarning)
     kind = machine_kind(drifter)
     defaults = default_constraints(kind)
     unknown = sorted(k for k in given if not isinstance(k, str) or constraint_output(k, kind) is None)

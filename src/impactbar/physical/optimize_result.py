@@ -98,7 +98,7 @@ class DrifterOptimum:
     @property
     def objective_key(self) -> str:
         """The figure of the records' ``objectives`` that is maximised (``"drilling_rate_per_kW"``,
-        a valve drifter's ``"percussive_power_kW"`` for ``"impact_power"``)."""
+        ``"impact_power_kW"`` for ``"impact_power"``, a valve drifter's too)."""
         return objectives(self.kind)[self.objective].key
 
     @property

@@ -16,6 +16,12 @@ unit (``mean_supply_pressure_MPa``, :func:`~impactbar.physical.display_units.dis
 of the summaries. A store holds the SI value (:attr:`Output.si_unit`: kW as W, mm as m, m/min as
 m/s).
 
+One name per quantity: an output's name (with its unit as a key) is the only one any view uses,
+and :attr:`Output.long_name` the only long name. A name an output had before is in
+:data:`RENAMED`: given to a tool (a constraint, a design map's or a store's variable, a key of a
+stored record) it still reads the output, with a ``DeprecationWarning`` naming the new one
+(:func:`current_name`, :func:`current_keys`).
+
 Views (:attr:`Output.views`): ``"store"`` a design map's variable, ``"summary"`` the operating
 point's summary and the CLI, ``"figure"`` a figure the sensitivities differentiate and the
 optimiser's records carry (``"record"`` those its records carry), ``"branch"`` a column of a
@@ -27,6 +33,7 @@ output of a number can be a constraint of the optimiser (its value at most the l
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -37,8 +44,8 @@ from .._shared.schema import Field
 from ..orbits.orbit import ORBIT_FIELDS
 from .display_units import display_unit
 
-__all__ = ["Output", "OUTPUTS", "register_output", "unregister_output", "outputs", "added_outputs",
-           "Reading", "output_values", "output_by_key"]
+__all__ = ["Output", "OUTPUTS", "RENAMED", "register_output", "unregister_output", "outputs",
+           "added_outputs", "Reading", "output_values", "output_by_key", "current_name", "current_keys"]
 
 #: The unit an output's value comes in that is not SI, to the SI unit a store holds and the factor
 #: (the value times it).
@@ -165,19 +172,17 @@ class Output:
         return value * factor if factor > 1.0 else value / round(1.0 / factor)
 
     @classmethod
-    def from_field(cls, declared: Field, long_name: str, of: Callable, **kwargs) -> Output:
+    def from_field(cls, declared: Field, of: Callable | None = None, **kwargs) -> Output:
         """The output of a quantity a result type declares already (a field of
-        :data:`~impactbar.orbits.orbit.ORBIT_FIELDS`): its name, unit, key and dtype read from the
-        field (its SI column where it has one), not written again.
+        :data:`~impactbar.orbits.orbit.ORBIT_FIELDS`): its name, long name, unit, key and dtype read
+        from the field (its SI column's unit and key where it has one), not written again.
 
         Parameters
         ----------
         declared : Field
             The declared field: the output's name is its name; its unit and key its SI column's
             (:class:`~impactbar._shared.schema.SI`) where it has one, else its own units.
-        long_name : str
-            The output's long name (a design map's variable is labelled with it).
-        of : callable
+        of : callable, optional
             ``of(reading)``, as :class:`Output`'s.
         **kwargs
             The other attributes of :class:`Output`.
@@ -189,17 +194,16 @@ class Output:
         si = declared.si
         unit = declared.units if si is None else si.units
         kwargs.setdefault("key", None if si is None else si.name)
-        return cls(declared.name, unit, long_name, of, dtype=declared.dtype, **kwargs)
+        return cls(declared.name, unit, declared.long_name, of, dtype=declared.dtype, **kwargs)
 
-    def column(self, long_name: str | None = None, **presentation) -> Field:
+    def column(self, **presentation) -> Field:
         """The output as a declared field of an SI result type (a column of
         :data:`~impactbar.physical.results.PHYSICAL_ORBIT_FIELDS`): named by its :attr:`key`, in
-        :attr:`unit`, of its dtype; the name and unit are the registry's, not written again.
+        :attr:`unit`, of its dtype, with its :attr:`long_name`; the name, unit and long name are the
+        registry's, not written again.
 
         Parameters
         ----------
-        long_name : str, optional
-            The column's long name; the output's by default.
         **presentation
             The other attributes of :class:`~impactbar._shared.schema.Field` (``views``, ``label``,
             ``fmt``).
@@ -208,7 +212,7 @@ class Output:
         -------
         Field
         """
-        return Field(self.key, long_name or self.long_name, self.unit, self.dtype, **presentation)
+        return Field(self.key, self.long_name, self.unit, self.dtype, **presentation)
 
     def applies(self, kind: str, rock: bool) -> bool:
         """Whether a machine of ``kind`` (with the rock or not) has it."""
@@ -307,30 +311,25 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            views={"store", "summary", "figure", "record", "branch"}, machines=_BOTH),
     Output("period", "s", "period of the operating point", lambda r: r.point.period_s,
            views={"store", "summary"}, machines=_BOTH),
-    Output.from_field(ORBIT_FIELDS["impact_velocity"], "piston velocity at impact",
-                      lambda r: r.point.impact_velocity_m_s, views={"store", "summary", "figure"},
-                      machines=_BOTH),
+    Output.from_field(ORBIT_FIELDS["impact_velocity"], of=lambda r: r.point.impact_velocity_m_s,
+                      views={"store", "summary", "figure"}, machines=_BOTH),
     Output("impact_energy", "J", "piston kinetic energy at impact", lambda r: r.point.impact_energy_J,
            blow=lambda b: b["impact_energy_J"], views={"store", "summary", "figure", "record", "branch"},
            machines=_BOTH),
-    Output.from_field(ORBIT_FIELDS["max_abs_multiplier"], "largest modulus of the non-trivial Floquet "
-                      "multipliers", lambda r: r.max_multiplier, views={"store", "figure"}, machines=_BOTH,
-                      key="max_multiplier", optional=True),
-    Output("mean_supply_pressure", "Pa", "supply pressure averaged over the period (absolute)",
+    Output.from_field(ORBIT_FIELDS["max_abs_multiplier"], of=lambda r: r.max_multiplier,
+                      views={"store", "figure"}, machines=_BOTH, key="max_multiplier", optional=True),
+    Output("mean_supply_pressure", "Pa", "absolute supply pressure averaged over the period",
            lambda r: r.point.mean_supply_pressure_Pa, views={"store", "summary", "figure", "branch"}),
-    Output("pump_power", "kW", "pump power Q_p (p_s - p_t) over the period", lambda r: r.point.pump_power_kW,
-           views={"store", "summary", "figure", "record", "branch"}),
+    Output("pump_power", "kW", "pump power, the flow Q_p times p_s - p_t, over the period",
+           lambda r: r.point.pump_power_kW, views={"store", "summary", "figure", "record", "branch"}),
     Output("impact_power", "kW", "kinetic energy at impact times the blow frequency",
-           lambda r: r.point.impact_power_kW, views={"summary", "figure", "record"},
+           lambda r: r.point.impact_power_kW, views={"summary", "figure", "record"}, machines=_BOTH,
            objective="impact_power"),
-    Output("percussive_power", "kW", "impact energy times blow frequency",
-           lambda r: r.point.percussive_power_kW, views={"summary", "record"}, machines={"drifter"},
-           objective="impact_power"),  # (the valve drifter's impact_power: the same product)
     Output("hydraulic_efficiency", "1", "energy the blows deliver over the pump's work",
            lambda r: r.point.hydraulic_efficiency, views={"store", "summary", "figure", "record", "branch"}),
-    Output.from_field(ORBIT_FIELDS["stable"], "every non-trivial multiplier inside the unit circle",
-                      lambda r: r.point.stable, views={"store", "summary"}, machines=_BOTH, edge=True),
-    *(Output(f"min_{v}_pressure", "Pa", f"least {what} pressure over the period (absolute)",
+    Output.from_field(ORBIT_FIELDS["stable"], of=lambda r: r.point.stable, views={"store", "summary"},
+                      machines=_BOTH, edge=True),
+    *(Output(f"min_{v}_pressure", "Pa", f"least absolute {what} pressure over the period",
              _least(v), views={"store"})
       for v, what in (("rear", "rear chamber"), ("front", "front chamber"), ("supply", "supply"))),
     Output("minimum_pressure", "Pa", "least absolute pressure of the oil over the period",
@@ -338,8 +337,8 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
     Output("cavitates", "", "an absolute pressure falls below 0 during the period",
            lambda r: bool(min(r.least.values()) < 0.0) if r.least else False, views={"store", "summary"},
            dtype="b1", edge=True),
-    Output.from_field(ORBIT_FIELDS["admissibility"], "whether the orbit is admissible, or why not",
-                      lambda r: str(r.point.orbit.admissibility), views={"summary"}, machines={"drifter"}),
+    Output.from_field(ORBIT_FIELDS["admissibility"], of=lambda r: str(r.point.orbit.admissibility),
+                      views={"summary"}, machines={"drifter"}),
     Output("multiplier", "1", "modulus of the first non-trivial Floquet multiplier",
            lambda r: abs(complex(r.point.multipliers[0])) if r.point.multipliers.size else 0.0,
            views={"summary"}, machines=_BOTH),
@@ -350,8 +349,8 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            edge=True),
     Output("relief_margin", "Pa", "relief pressure less the greatest supply pressure",
            lambda r: r.borders.get("relief", math.inf), views={"store", "summary"}),
-    Output("accumulator_empties", "", "the supply pressure falls below the pre-charge during the period "
-                                      "(the accumulator empties)",
+    Output("accumulator_empties", "", "the accumulator empties: the supply pressure falls below the "
+                                      "pre-charge during the period",
            lambda r: bool(r.borders.get("accumulator", math.inf) < 0.0), views={"store"}, dtype="b1",
            edge=True),
     Output("accumulator_margin", "Pa", "least supply pressure less the accumulator pre-charge",
@@ -365,15 +364,16 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            rock=True, objective="work_on_rock_per_blow"),
     Output("penetration", "mm", "permanent penetration per blow", _rock("penetration_mm"),
            views={"store"}, machines=_BOTH, rock=True),
-    Output("drilling_rate", "m/min", "drilling rate", _rock("drilling_rate_m_min"),
+    Output("drilling_rate", "m/min", "drilling rate: the penetration per blow times the blow frequency",
+           _rock("drilling_rate_m_min"),
            views={"store", "figure", "record"}, machines=_BOTH, rock=True, objective="drilling_rate"),
-    Output("peak_incident_stress", "Pa", "peak stress of the incident wave in the shank",
-           _rock("peak_rod_stress_Pa"), blow=lambda b: b["peak_stress_Pa"], views={"store"}, machines=_BOTH,
-           rock=True),
-    Output("rod_energy", "J", "energy of the incident wave in the rod", _rock("rod_energy_J"),
+    Output("peak_rod_stress", "Pa", "peak compressive stress of the incident wave in the rod",
+           _rock("peak_rod_stress_Pa"), blow=lambda b: b["peak_rod_stress_Pa"], views={"store"},
+           machines=_BOTH, rock=True),
+    Output("rod_energy", "J", "energy carried into the rod per blow", _rock("rod_energy_J"),
            views={"store"}, machines=_BOTH, rock=True),
-    Output("rock_efficiency", "1", "work on rock over the energy of the blow", _rock("efficiency"),
-           views={"store"}, machines=_BOTH, rock=True),
+    Output.from_field(ORBIT_FIELDS["efficiency"], of=_rock("efficiency"), blow=lambda b: b["efficiency"],
+                      views={"store", "record"}, machines=_BOTH, rock=True),
     Output("drilling_rate_per_kW", "m/min/kW", "drilling rate over the pump's power",
            lambda r: r.rock["drilling_rate_m_min"] / r.point.pump_power_kW, views={"figure", "record"},
            rock=True, key="drilling_rate_per_kW", objective="drilling_rate_per_kW"),
@@ -383,11 +383,99 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            lambda r: float(min(np.min(r.histories["V_f_m3"]), np.min(r.histories["V_r_m3"])))),
     Output("piston_mass", "kg", "the piston's mass", lambda r: r.point.drifter.bar.mass_kg,
            blow=lambda b: b["piston_mass_kg"], machines=_BOTH),
-    Output("blow_efficiency", "1", "work on the rock over the piston's kinetic energy at impact",
-           blow=lambda b: b["efficiency"], views={"record"}, machines=_BOTH, rock=True),
 )}
 
 _BUILTIN = frozenset(OUTPUTS)
+
+#: The names outputs had before, to their names now (one quantity, one name): the map stores and the
+#: optimiser's constraints said ``peak_incident_stress`` for the orbit's and the rock figures'
+#: ``peak_rod_stress``, and ``rock_efficiency`` (an operating point's) and ``blow_efficiency`` (an
+#: ideal blow's) for the blow's ``efficiency``; the valve drifter's summaries said ``percussive_power``
+#: for ``impact_power`` (the kinetic energy at impact times the blow frequency, both machines').
+RENAMED = {"peak_incident_stress": "peak_rod_stress", "rock_efficiency": "efficiency",
+           "blow_efficiency": "efficiency", "percussive_power": "impact_power"}
+
+
+def current_name(name: str, what: str = "output") -> str:
+    """An output's name now: ``name`` itself, or the name that replaced it (:data:`RENAMED`, its key
+    with the unit too: ``peak_incident_stress_Pa``), with a ``DeprecationWarning`` naming it.
+
+    Parameters
+    ----------
+    name : str
+        A name or key as a user wrote it (a constraint's ``min_<name>`` too).
+    what : str
+        What the name is, for the warning (``"constraint"``, ``"variable"``).
+
+    Returns
+    -------
+    str
+        The name with the old output name replaced (its ``min_`` prefix and unit suffix kept).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from impactbar.physical.outputs import current_name
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     current_name("min_rock_efficiency", "constraint"), str(caught[0].message)
+    ('min_efficiency', "constraint 'min_rock_efficiency' is now called 'min_efficiency'")
+    """
+    stem = _old_stem(name)
+    if stem is None:
+        return name
+    new = _OLD_KEYS[stem]
+    renamed = name[:len(name) - len(stem)] + new
+    warnings.warn(f"{what} {name!r} is now called {renamed!r}", DeprecationWarning, stacklevel=3)
+    return renamed
+
+
+def current_keys(record: dict, what: str = "key") -> dict:
+    """A record read back with the outputs' names now.
+
+    Parameters
+    ----------
+    record : dict
+        Figures or limits by name or key (a stored record's, a user's constraints).
+    what : str
+        What the keys are, for the warning.
+
+    Returns
+    -------
+    dict
+        ``record`` with each old name or key (:data:`RENAMED`) replaced by the name now
+        (:func:`current_name`: a ``DeprecationWarning`` each), in its order; ``record`` itself where
+        none is old.
+    """
+    if not any(_old_stem(k) for k in record):
+        return record
+    return {current_name(k, what): v for k, v in record.items()}
+
+
+def _old_keys() -> dict:
+    """Each old name of :data:`RENAMED` and its key with the unit, to the name or key now."""
+    out = {}
+    for old, new in RENAMED.items():
+        o = OUTPUTS[new]
+        out[old] = new
+        if o.key != new:
+            out[_named(old, o.unit)] = o.key
+        if o.shown_key != o.key:
+            out[_named(old, o.shown_unit)] = o.shown_key
+    return out
+
+
+_OLD_KEYS = _old_keys()
+
+
+def _old_stem(name) -> str | None:
+    """The old name or key in ``name`` (itself, or after ``min_``), ``None`` for none."""
+    if not isinstance(name, str):
+        return None
+    for stem in (name, name[4:] if name.startswith("min_") else None):
+        if stem in _OLD_KEYS:
+            return stem
+    return None
 
 
 def register_output(output: Output) -> Output:
@@ -459,6 +547,7 @@ def output_by_key(key: str) -> Output:
     ValueError
         No such output.
     """
+    key = current_name(key)
     for o in OUTPUTS.values():
         if key in (o.name, o.key):
             return o

@@ -426,7 +426,7 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
     -------
     dict
         ``work_on_rock_J``, ``efficiency`` (the work over the impact energy, plus the feed's),
-        ``impact_energy_J`` (:math:`m V^2/2`), ``peak_stress_Pa`` (the exact peak of the
+        ``impact_energy_J`` (:math:`m V^2/2`), ``peak_rod_stress_Pa`` (the exact peak of the
         incident wave, the piston-shank force over the rod's first area as
         :attr:`OptimalPiston.peak_stress_Pa` reads it), ``blow_peak_stress_Pa`` (of the whole
         blow, re-contacts included), ``mass_kg``, ``length_m``, ``method``
@@ -483,7 +483,8 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
     to_Pa = force_N / pieces[0].area_m2
     peak, _ = b.peak_shank_force()
     return {"work_on_rock_J": b.work_on_rock * energy_J, "efficiency": b.efficiency,
-            "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": b.incident_peak_force(back) * to_Pa,
+            "impact_energy_J": 0.5 * m * V * V,
+            "peak_rod_stress_Pa": b.incident_peak_force(back) * to_Pa,
             "blow_peak_stress_Pa": peak * to_Pa,
             "mass_kg": m, "length_m": L, "method": b.method, "blow": b}
 

@@ -57,27 +57,22 @@ def _shown(declared: Field, label: str) -> Field:
 
 #: The declared fields of :class:`PhysicalOrbit`: the orbit's in SI (generated from
 #: :data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the hammer's figures per blow; a figure that is
-#: an output of a drifter (:data:`impactbar.physical.outputs.OUTPUTS`) takes its name and unit from it
-#: (:meth:`~impactbar.physical.outputs.Output.column`), its long name, label and format its own
+#: an output of a drifter (:data:`impactbar.physical.outputs.OUTPUTS`) takes its name, unit and long
+#: name from it (:meth:`~impactbar.physical.outputs.Output.column`), its label and format its own
 PHYSICAL_ORBIT_FIELDS = _ORBIT_SI + Schema(
     Field("blow_energy_J", "energy per blow m v^2 / 2", "J", views={"dict", "table", "cli"},
           label="E/J", fmt=".2f"),
-    OUTPUTS["blow_frequency"].column("blows per second", views={"dict", "table"}),
+    OUTPUTS["blow_frequency"].column(views={"dict", "table"}),
     Field("power_W", "impact power", "W", views={"dict", "table", "cli"}, label="P/W", fmt=".1f"),
     _shown(Field("peak_stress_Pa", "peak compressive stress at impact", "Pa", views={"dict", "table", "cli"},
                  fmt=".1f"), "sigma"),
-    OUTPUTS["rod_energy"].column("energy carried into the rod per blow (theory §4b)",
-                                 views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
-    _shown(Field("peak_rod_stress_Pa", "peak compressive stress of the transmitted wave in the rod", "Pa",
-                 views={"dict", "table", "cli"}, fmt=".1f"), "rod"),
-    Field("efficiency", "rod energy over the energy available to the blow", views={
-          "dict", "table", "cli", "cli_rock"}, label="eff.", fmt=".3f"),
+    OUTPUTS["rod_energy"].column(views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
+    _shown(OUTPUTS["peak_rod_stress"].column(views={"dict", "table", "cli"}, fmt=".1f"), "rod"),
+    OUTPUTS["efficiency"].column(views={"dict", "table", "cli", "cli_rock"}, label="eff.", fmt=".3f"),
     Field("rod_advance_m", "advance of the rod end per blow", "m", views={"dict", "table"}),
-    OUTPUTS["work_on_rock"].column("work on rock per blow (theory §4d)", views={"dict", "cli_rock"},
-                                   label="rock/J", fmt=".2f"),
+    OUTPUTS["work_on_rock"].column(views={"dict", "cli_rock"}, label="rock/J", fmt=".2f"),
     OUTPUTS["penetration"].column(views={"dict", "cli_rock"}, label="pen./mm", fmt=".4f"),
-    OUTPUTS["drilling_rate"].column("penetration times the blow frequency", views={"dict", "cli_rock"},
-                                    label="rate m/min", fmt=".4f"),
+    OUTPUTS["drilling_rate"].column(views={"dict", "cli_rock"}, label="rate m/min", fmt=".4f"),
     Field("efficiency_with_rebound", "work on rock over the available energy less the rebound's",
           views={"dict", "cli_rock"}, label="eff.+reb.", fmt=".3f"),
 )

@@ -67,11 +67,13 @@ CHAINS = ("continue", "default")
 STATUS = {0: "orbit found", 1: "no orbit (ValueError)", 2: "failed (another error)"}
 
 
-def _stored(output: Output, long_name: str | None = None, suffix: str = "") -> Field:
-    """An output (:mod:`impactbar.physical.outputs`) as a map's stored variable: its name (then
-    ``suffix``), long name (or ``long_name``), SI units and dtype, as the registry declares them."""
-    return Field(output.name + suffix, long_name or output.long_name, cf_unit(output.si_unit),
-                 dtype=output.dtype)
+def _stored(output: Output, how: str = "", suffix: str = "", long_name: str | None = None) -> Field:
+    """An output (:mod:`impactbar.physical.outputs`) as a map's stored variable: its name, long name,
+    SI units and dtype, as the registry declares them; ``how`` it is measured the variable's
+    description adds in parentheses (its ``long_name`` attribute stays the output's). A statistic
+    of the output is another variable: its name the output's then ``suffix``, its own ``long_name``."""
+    long = (long_name or output.long_name) + (f" ({how})" if how else "")
+    return Field(output.name + suffix, long, cf_unit(output.si_unit), dtype=output.dtype)
 
 
 _VELOCITY, _FREQUENCY = OUTPUTS["impact_velocity"], OUTPUTS["blow_frequency"]
@@ -82,12 +84,13 @@ _SETTLE = (
     Field("settled", "the blows repeat a cycle (period_blows > 0)", "", dtype="b1"),
     Field("chatter_per_blow", "chatter impacts per blow over the last period (settled) or the second "
                               "half's blows (not settled)", "1"),
-    _stored(_VELOCITY, "mean piston velocity at the blows of the last period (settled) or of the second "
-                       "half (not settled)"),
-    _stored(_VELOCITY, "standard deviation of those blows' impact velocities", "_spread"),
+    _stored(_VELOCITY, "the mean at the blows of the last period (settled) or of the second half (not "
+                       "settled)"),
+    _stored(_VELOCITY, suffix="_spread", long_name="standard deviation of those blows' impact velocities"),
     _stored(_FREQUENCY, "blows per unit time over the last period (settled) or between the second half's "
                         "blows (not settled)"),
-    _stored(_FREQUENCY, "standard deviation of the inverse intervals between those blows", "_spread"),
+    _stored(_FREQUENCY, suffix="_spread",
+            long_name="standard deviation of the inverse intervals between those blows"),
     Field("n_blows", "blows of the run (impacts at least blow_fraction of the hardest)", "", dtype="i4"),
     Field("n_impacts", "impacts of the run, blows and chatter", "", dtype="i4"),
     Field("simulated_time", "time simulated from rest, to the last blow counted", "s"),

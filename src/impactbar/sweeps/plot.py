@@ -113,7 +113,9 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
         Fix axes at the nearest grid value, down to two.
     dpi : int, optional
     variable : str, optional
-        The variable of a design map to draw (default the blow frequency); only for one.
+        The variable of a design map to draw (default the blow frequency); only for one. A name an
+        output had before reads the output's variable, with a ``DeprecationWarning``
+        (:data:`~impactbar.physical.outputs.RENAMED`).
 
     Returns
     -------
@@ -138,9 +140,11 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
+    from ..physical.outputs import current_name
     from .store import open_sweep, stored_spec
 
     ds = open_sweep(store)
+    variable = None if variable is None else current_name(variable, "--variable")
     task = ds.attrs["task"]
     if variable is not None and task not in ("operating_point", "settle"):
         raise ValueError(f"--variable is for a drifter's design map (task operating_point or settle); this "

@@ -397,7 +397,9 @@ def _write_done(path: Path, done: np.ndarray, sums: np.ndarray, group=None) -> N
 
 
 def open_sweep(path):
-    """Open a sweep store as an ``xarray.Dataset`` (lazily; ``xarray.open_zarr`` does the same).
+    """Open a sweep store as an ``xarray.Dataset`` (lazily; ``xarray.open_zarr`` does the same); a
+    variable of an output stored under a name it had before holds the name now
+    (:data:`~impactbar.physical.outputs.RENAMED`, with a ``DeprecationWarning``).
 
     Raises
     ------
@@ -419,10 +421,15 @@ def open_sweep(path):
     """
     import xarray as xr
 
+    from ..physical.outputs import current_name
+
     path = Path(path)
     if not _is_sweep_store(path):
         raise ValueError(f"{path} is not an impactbar sweep store")
-    return xr.open_zarr(path)
+    ds = xr.open_zarr(path)
+    # a store written before an output was renamed: its variable under the name now (a DeprecationWarning)
+    renamed = {n: new for n in ds.data_vars if (new := current_name(n, f"{path.name}: variable")) != n}
+    return ds.rename(renamed) if renamed else ds
 
 
 def stored_spec(ds) -> SweepSpec:

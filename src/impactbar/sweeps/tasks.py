@@ -14,6 +14,7 @@ from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
 from ..dynamics.implementations import implementation
 from ..laws import get_law
+from ..orbits.orbit import ORBIT_FIELDS
 
 if TYPE_CHECKING:
     from .spec import SweepSpec
@@ -59,10 +60,11 @@ _FAILED = Field("failed", "the computation raised ValueError at this point (e.g.
 #: the ``orbits`` task's variables under the rod-rock law: figures of each orbit's blow
 #: (:class:`impactbar.Blow`, read on ``orbit.contacts[0]``), along ``orbit``
 _ROCK = Schema(
-    Field("work_on_rock", "work done on the rock in the orbit's blow (model units)", per="orbit"),
-    Field("penetration", "permanent penetration of the orbit's blow (model lengths): the rod's "
-                         "advance per period", attr="permanent_penetration", per="orbit"),
-    Field("efficiency", "work on rock over the energy available to the blow", per="orbit"),
+    Field("work_on_rock", "work done on the rock per blow (model units: the orbit's blow)", per="orbit"),
+    Field("penetration", "permanent penetration per blow (model lengths: the orbit's blow, the rod's "
+                         "advance per period)", attr="permanent_penetration", per="orbit"),
+    dataclasses.replace(ORBIT_FIELDS["efficiency"], attr=None, views=frozenset(), optional=False,
+                        per="orbit"),  # (the orbit's declared field: its name and long name)
     Field("efficiency_with_rebound", "the same with the piston's rebound energy credited", per="orbit"))
 _MOTION = "load periods"
 _TASK_VARIABLES = {
@@ -87,8 +89,6 @@ def _bar_variables(spec: SweepSpec) -> Schema:
     sweep stores the orbit's fields in the view ``"sweep"`` (:data:`~impactbar.orbits.orbit.ORBIT_FIELDS`)
     along ``orbit``."""
     if spec.task == "orbits":
-        from ..orbits.orbit import ORBIT_FIELDS
-
         orbit = Schema(*(dataclasses.replace(f, per="orbit") for f in ORBIT_FIELDS.select("sweep")))
         count = Field("n_orbits", "number of one-impact orbits", "", dtype="i4")
         return orbit + Schema(count) + (_ROCK if spec.rock is not None else Schema()) + Schema(_FAILED)
@@ -171,7 +171,6 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     :func:`impactbar.periodic_orbits`, tested against it). Returns the local indices left to the
     point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
     apply."""
-    from ..orbits.orbit import ORBIT_FIELDS
     from ..orbits.rigid import CLOSED_FORM_KINDS, closed_form_groups
 
     if spec.rock is not None or spec.law is not None or spec.load is None \
@@ -226,7 +225,6 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
 
 def _orbits_point(spec, model, load, flat, out, local) -> None:
     from ..orbits import periodic_orbits
-    from ..orbits.orbit import ORBIT_FIELDS
 
     orbits = periodic_orbits(model, load)
     n = len(orbits)

@@ -1,0 +1,205 @@
+"""One quantity, one name and one long name: every output the registry
+(:mod:`impactbar.physical.outputs`) declares appears in every view (the SI results' ``to_dict`` and
+tables, the design maps' stored variables and their attributes, the dimensionless sweep's, the
+sensitivities, the optimiser's objectives and constraints, the operating point's and a blow's figures)
+under its name, or its name with its unit (its key), and with its long name; a name it had before
+(:data:`~impactbar.physical.outputs.RENAMED`) still reads it, with a ``DeprecationWarning``.
+
+The views are walked, not listed: each schema's fields, and the figures an output is read from,
+found by reading each output from a recording stand-in of an operating point and of a blow (an
+output that is a figure read as it is must be named as the figure: ``peak_rod_stress`` is read
+from ``peak_rod_stress_Pa``; two outputs that read one figure are one quantity twice)."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, IDEAL_CONSTRAINTS, OBJECTIVES
+from impactbar.physical.optimize_outputs import constraint_output
+from impactbar.physical.outputs import OUTPUTS, RENAMED, current_keys, current_name, output_by_key
+from impactbar.physical.results import PHYSICAL_ORBIT_FIELDS
+from impactbar.physical.sensitivity import FIGURE_UNITS
+from impactbar.sweeps.map_spec import map_variables
+from impactbar.sweeps.store import _var_attrs
+from impactbar.sweeps.tasks import _ROCK
+
+
+class Read:
+    """A stand-in that records the path by which it was read (``point.pump_power_kW``,
+    ``rock["work_on_rock_J"]``); anything computed from it raises or gives another object."""
+
+    def __init__(self, *path):
+        self.path = path
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        if name == "get":  # (a dict's get(key, default): a read of key)
+            return lambda key, default=None: Read(*self.path, key)
+        return Read(*self.path, name)
+
+    def __getitem__(self, key):
+        return Read(*self.path, key)
+
+    def __call__(self, *args, **kwargs):
+        return Read(*self.path, "()")
+
+    def __iter__(self):
+        raise TypeError("a recorded reading is not iterable")
+
+
+#: where an output reads a figure as it is: an operating point's attribute, its rock figures, a blow's
+_SOURCES = {("point",): "an operating point's attribute", ("rock",): "the rock figures",
+            (): "a blow's figures"}
+
+
+def figures_read() -> list:
+    """``(output, where, figure)`` for each output that is a figure read as it is."""
+    found = []
+    for o in OUTPUTS.values():
+        for fn, start in ((o.of, Read()), (o.blow, Read())):
+            if fn is None:
+                continue
+            try:
+                got = fn(start)
+            except Exception:  # computed from several figures, or not a plain read
+                continue
+            if isinstance(got, Read) and got.path[:-1] in _SOURCES:
+                found.append((o, _SOURCES[got.path[:-1]], got.path[-1]))
+    return found
+
+
+def test_an_output_read_from_a_figure_is_named_as_the_figure():
+    read = figures_read()
+    assert len(read) >= 15  # (the walk sees the figures: the point's, the rock's, a blow's)
+    wrong = [f"{o.name} (key {o.key}) reads {where}' {figure!r}" for o, where, figure in read
+             if figure != o.key]
+    assert not wrong, "one quantity under two names:\n" + "\n".join(wrong)
+    by_figure: dict = {}
+    for o, where, figure in read:
+        by_figure.setdefault((where, figure), set()).add(o.name)
+    twice = {k: v for k, v in by_figure.items() if len(v) > 1}
+    assert not twice, f"one figure declared as two outputs: {twice}"
+
+
+def _views() -> list:
+    """``(view, name, long name, units)`` of every field of every view that shows outputs."""
+    rows = [("PhysicalOrbit", f.name, f.long_name, f.units) for f in PHYSICAL_ORBIT_FIELDS]
+    for kind in ("drifter", "circuit"):
+        for rock in (False, True):
+            for task in ("operating_point", "settle"):
+                for f in map_variables(kind, rock, task):
+                    attrs = _var_attrs(f.name, f.long_name, f.units)
+                    rows.append((f"map store ({kind}, {task})", f.name, attrs["long_name"], None))
+    rows += [("sweep store (rock)", f.name, _var_attrs(f.name, f.long_name, f.units)["long_name"], None)
+             for f in _ROCK]
+    rows += [("sensitivities", key, None, None) for key in FIGURE_UNITS]
+    rows += [("objectives", key, long_name, unit) for key, unit, long_name in OBJECTIVES.values()]
+    return rows
+
+
+def _output_named(name: str):
+    """The output whose name, key or display key ``name`` is, ``None`` for none."""
+    return next((o for o in OUTPUTS.values() if name in (o.name, o.key, o.shown_key)), None)
+
+
+def test_each_view_names_an_output_by_its_name_and_long_name():
+    rows = _views()
+    stale = [f"{view}: {name}" for view, name, _, _ in rows
+             if name in RENAMED or any(name.startswith(f"{k}_") for k in RENAMED)]
+    assert not stale, f"a view still says an old name: {stale}"
+    seen = 0
+    bad = []
+    for view, name, long_name, _ in rows:
+        o = _output_named(name)
+        if o is None:
+            continue
+        seen += 1
+        if long_name is not None and long_name != o.long_name:
+            bad.append(f"{view}: {name} is {long_name!r}, the registry's {o.name} {o.long_name!r}")
+    assert seen >= 40
+    assert not bad, "one quantity, two long names:\n" + "\n".join(bad)
+
+
+def test_the_constraints_are_named_by_their_outputs():
+    for name in (*DEFAULT_CONSTRAINTS, *IDEAL_CONSTRAINTS):
+        assert name not in RENAMED
+        o = constraint_output(name).output
+        assert name in (o.name, o.key, f"min_{o.name}") or _output_named(name) is None
+
+
+@pytest.mark.parametrize("old", sorted(RENAMED))
+def test_an_old_name_reads_the_output_with_a_deprecation_warning(old):
+    new = RENAMED[old]
+    o = OUTPUTS[new]
+    with pytest.warns(DeprecationWarning, match=f"'{old}' is now called '{new}'"):
+        assert output_by_key(old) is o
+    with pytest.warns(DeprecationWarning, match=f"'{old}_{o.unit}' is now called '{o.key}'" if o.key != new
+                      else f"'{old}' is now called"):
+        assert output_by_key(old if o.key == new else f"{old}_{o.unit}") is o
+    with pytest.warns(DeprecationWarning, match=f"constraint 'min_{old}' is now called 'min_{new}'"):
+        assert constraint_output(f"min_{old}").output is o
+    with pytest.warns(DeprecationWarning, match=f"'{old}' is now called '{new}'"):
+        assert current_keys({old: 1.0, "stable": True}) == {new: 1.0, "stable": True}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the names now: no warning, the same object back
+        record = {new: 1.0}
+        assert current_name(new) == new and current_keys(record) is record
+
+
+def test_an_old_store_opens_with_the_names_now(tmp_path):
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("zarr")
+    from impactbar.sweeps.store import _ATTR_SPEC, open_sweep
+
+    ds = xr.Dataset({"peak_incident_stress": ("x", [2.0e8]), "rock_efficiency": ("x", [0.7]),
+                     "stable": ("x", [True])})
+    ds.attrs[_ATTR_SPEC] = "{}"
+    ds.to_zarr(tmp_path / "old.zarr")
+    with pytest.warns(DeprecationWarning, match="variable 'rock_efficiency' is now called 'efficiency'"):
+        opened = open_sweep(tmp_path / "old.zarr")
+    assert set(opened.data_vars) == {"peak_rod_stress", "efficiency", "stable"}
+    assert float(opened["peak_rod_stress"][0]) == 2.0e8
+
+
+def test_an_old_cache_reads_its_records_under_the_names_now(tmp_path):
+    import json
+
+    from impactbar.physical.optimize_cache import read_cache
+
+    path = tmp_path / "cache.json"
+    path.write_text(json.dumps({"problem": "t", "evaluations": [
+        {"id": 0, "objectives": {"blow_efficiency": 0.8, "work_on_rock_J": 200.0},
+         "constraints": {"peak_incident_stress": {"value": 2e8, "limit": 2.5e8}}}]}))
+    with pytest.warns(DeprecationWarning, match="'blow_efficiency' is now called 'efficiency'"):
+        (record,) = read_cache(path, "t").values()
+    assert record["objectives"] == {"efficiency": 0.8, "work_on_rock_J": 200.0}
+    assert list(record["constraints"]) == ["peak_rod_stress"]
+
+
+def test_a_constraint_given_by_its_old_name_limits_the_output():
+    from pathlib import Path
+
+    from impactbar.physical import build, read_config
+    from impactbar.physical.optimize_problem import _limits
+
+    cfg, folder = read_config(str(Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"))
+    drifter = build(cfg, folder)
+    with pytest.warns(DeprecationWarning, match="'peak_incident_stress' is now called 'peak_rod_stress'"):
+        old = _limits({"peak_incident_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}, drifter)
+    assert old == _limits({"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}, drifter)
+    assert old["peak_rod_stress"] == 250e6
+
+
+def test_the_valve_drifters_old_power_reads_the_impact_power():
+    """The valve drifter's ``percussive_power_kW`` was the circuit drifter's ``impact_power_kW`` (the
+    kinetic energy at impact times the blow frequency): one name now, the old one a warning."""
+    from impactbar.physical import drifter_preset
+
+    o = drifter_preset("hydraulic-drifter").orbit()
+    assert o.impact_power_kW == o.impact_energy_J * o.blow_frequency_Hz / 1e3
+    assert "impact_power_kW" in o.summary() and "percussive_power_kW" not in o.summary()
+    with pytest.warns(DeprecationWarning, match="percussive_power_kW is now called impact_power_kW"):
+        assert o.percussive_power_kW == o.impact_power_kW
