@@ -33,18 +33,23 @@ class FlightData(NamedTuple):
         The code generated for the network's topology (:mod:`._netgen`).
     directions : numpy.ndarray of int32
         The events' directions for CVODE's root finding (:meth:`HydraulicCircuitDrive._directions`).
+    end_weights, drive_weights : numpy.ndarray
+        The bar's ``end_weights`` and ``drive_weights`` (:class:`~impactbar.BarModel`; dimensionless),
+        never written.
     """
 
     par: np.ndarray
     code: object
     directions: np.ndarray
+    end_weights: np.ndarray
+    drive_weights: np.ndarray
 
 
 def flight_data(drive, model, mode, variational=False) -> FlightData:
     """What a flight of ``model`` under ``drive`` in ``mode`` reads, made once per drive and kept
     (the drive's ``_flights`` store): the same arrays as the drive's ``_par`` (with the network
-    of ``_compiled_network`` after it) and ``_directions`` give, without their some 30 microseconds a
-    flight.
+    of ``_compiled_network`` after it) and ``_directions`` give, and the bar's weights, without their
+    some 60 microseconds a flight.
 
     Parameters
     ----------
@@ -59,7 +64,7 @@ def flight_data(drive, model, mode, variational=False) -> FlightData:
     Returns
     -------
     FlightData
-        Its ``par`` shared by every flight of the key: never to be written.
+        Its arrays shared by every flight of the key: never to be written.
     """
     key = (model, tuple(mode), bool(variational))
     store = drive._flights
@@ -69,7 +74,8 @@ def flight_data(drive, model, mode, variational=False) -> FlightData:
             store.clear()
         net, code = drive._compiled_network(mode)
         data = store[key] = FlightData(np.concatenate((drive._par(model, mode, variational), net)), code,
-                                       np.asarray(drive._directions(mode), dtype=np.int32))
+                                       np.asarray(drive._directions(mode), dtype=np.int32),
+                                       model.end_weights, model.drive_weights)
     return data
 
 

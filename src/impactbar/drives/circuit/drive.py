@@ -361,9 +361,9 @@ class HydraulicCircuitDrive(Drive):
                 "check that the chambers keep a positive volume (rear_volume against the stroke) and that "
                 "the pump flow and the areas can move the piston")
 
-    def _check_volumes(self, model, piece, t) -> None:
-        M = model.n_modes + 1
-        nur, nuf = self.chambers.least_volumes(-(piece.y[:, :M] @ model.drive_weights))
+    def _check_volumes(self, weights, piece, t) -> None:
+        # (weights: the bar's drive_weights)
+        nur, nuf = self.chambers.least_volumes(-(piece.y[:, :weights.size] @ weights))
         if nur <= 0.0 or nuf <= 0.0:
             which = "rear" if nur <= 0.0 else "front"
             now = getattr(self.chambers, which + "_volume")
@@ -435,7 +435,7 @@ class HydraulicCircuitDrive(Drive):
         L = self.layout
         q = np.asarray(q, dtype=float)
         M = q.size
-        par, code, _ = self._flight_data(_rate_model(M) if model is None else model, mode)
+        par, code, *_ = self._flight_data(_rate_model(M) if model is None else model, mode)
         y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:L.n_states]))
         out = np.empty(L.size(M) + L.n_energy)
         code.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])

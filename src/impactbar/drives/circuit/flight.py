@@ -592,12 +592,14 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     if magnus:  # the plain flight, its state as accurate as the variational flight's, then Phi over its steps
         variational = False
         settings = magnus_state_settings(settings)
-    L, c = drive.layout, model.end_weights
+    L = drive.layout
     n, n_energy = L.size(M), L.n_energy
-    if generated:  # (made once per drive, bar and mode: never written)
-        par, code, directions = drive._flight_data(model, mode, variational)
+    if generated:  # (made once per drive, bar and mode: never written; the piece's c its own)
+        par, code, directions, c, weights = drive._flight_data(model, mode, variational)
+        c = c.copy()
     else:
         par, code, directions = drive._par(model, mode, variational), kernels, drive._directions(mode)
+        c, weights = model.end_weights, model.drive_weights
     field_at = code.field_at
     y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
     if variational:
@@ -633,7 +635,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         keep_t = np.concatenate(([True], later))
         ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, c, drive.chambers.area_ratio, L, field_at)
-    drive._check_volumes(model, piece, t)
+    drive._check_volumes(weights, piece, t)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
