@@ -20,6 +20,7 @@ import numpy as np
 from ..base import Drive, DriveState, GapCrossing, SurfaceEvent
 from . import _bar as K
 from . import _network as NW
+from ._kernel_data import FlightData, _network_code, _par_base, _rate_model, flight_data
 from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .energy import CircuitEnergy
@@ -48,7 +49,8 @@ _REL = "relief"
 #: the events the drive reads itself (the others an extra part's, :func:`.watch.watched`)
 _OWN_EVENTS = (_RAMP, _ACC, _REL)
 #: the drive's caches computed on use (its ``functools.cached_property`` s), left out of its pickle
-_CACHED = ("_composition", "_stand_in", "_watched", "traits")
+_CACHED = ("_composition", "_stand_in", "_watched", "traits", "abilities", "_event_parts", "_event_slots",
+           "_event_flags", "_per_mode", "_flights")
 
 
 @dataclass(frozen=True)
@@ -315,14 +317,36 @@ class HydraulicCircuitDrive(Drive):
         callbacks), made once per drive and mode."""
         return _network_code(self, tuple(mode))
 
+    def _flight_data(self, model, mode, variational=False) -> FlightData:
+        """The parameters, the generated code and the events' directions of a flight of ``model`` in
+        ``mode`` (``variational``: with the variational equations), made once and kept
+        (:func:`._kernel_data.flight_data`)."""
+        return flight_data(self, model, mode, variational)
+
+    @functools.cached_property
+    def _flights(self) -> dict:
+        """:meth:`_flight_data`'s store, by model, mode and kind of flight."""
+        return {}
+
+    @functools.cached_property
+    def _per_mode(self) -> dict:
+        """:meth:`events`' store, by mode."""
+        return {}
+
     def _directions(self, mode):
         # (the bar's, the ramp's end, then one a flag of the mode: the network's event slots 1..)
         target, _, *flags = mode
         return (1, 1, -1, 1 if target else -1) + tuple(-1 if f else 1 for f in flags)
 
-    def _fired(self, mode, hit):
+    @functools.cached_property
+    def _event_slots(self) -> dict:
+        """The events' names by their slots in the kernels' event functions (:meth:`_fired`)."""
         names = {K.OUT_EV: _SWITCH_OUT, K.IN_EV: _SWITCH_IN, K.RAMP_EV: _RAMP}
         names.update((K.RAMP_EV + i, name) for i, name in enumerate(self._composition.events))
+        return names
+
+    def _fired(self, mode, hit):
+        names = self._event_slots
         wanted = {names[i] for i in hit if i in names}
         return tuple(e for e in self.events(mode) if e.name in wanted)
 
@@ -337,13 +361,11 @@ class HydraulicCircuitDrive(Drive):
                 "check that the chambers keep a positive volume (rear_volume against the stroke) and that "
                 "the pump flow and the areas can move the piston")
 
-    def _check_volumes(self, model, piece, t) -> None:
-        M = model.n_modes + 1
-        w = -(piece.y[:, :M] @ model.drive_weights)
-        nur = self.chambers.rear_volume - w
-        nuf = self.chambers.front_volume + self.chambers.area_ratio * w
-        if np.min(nur) <= 0.0 or np.min(nuf) <= 0.0:
-            which = "rear" if np.min(nur) <= 0.0 else "front"
+    def _check_volumes(self, weights, piece, t) -> None:
+        # (weights: the bar's drive_weights)
+        nur, nuf = self.chambers.least_volumes(-(piece.y[:, :weights.size] @ weights))
+        if nur <= 0.0 or nuf <= 0.0:
+            which = "rear" if nur <= 0.0 else "front"
             now = getattr(self.chambers, which + "_volume")
             raise ValueError(f"the {which} chamber empties (V <= 0) near t = {t:.6g}: the piston overtravels "
                              f"it; give a larger {which}_volume (now {now:g}) or a switch position nearer "
@@ -404,7 +426,7 @@ class HydraulicCircuitDrive(Drive):
     piston_work_quadrature = PRESET.energy["piston"]
     traits = functools.cached_property(circuit_traits)
     params = property(circuit_params)
-    abilities = property(circuit_abilities)
+    abilities = functools.cached_property(circuit_abilities)
 
     def _field(self, mode, z, q, v, model):
         """The compiled vector field at one state (the code generated for the network's topology,
@@ -413,8 +435,7 @@ class HydraulicCircuitDrive(Drive):
         L = self.layout
         q = np.asarray(q, dtype=float)
         M = q.size
-        net, code = self._compiled_network(mode)
-        par = np.concatenate((self._par(_rate_model(M) if model is None else model, mode), net))
+        par, code, *_ = self._flight_data(_rate_model(M) if model is None else model, mode)
         y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:L.n_states]))
         out = np.empty(L.size(M) + L.n_energy)
         code.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])
@@ -430,6 +451,14 @@ class HydraulicCircuitDrive(Drive):
         return out[self.layout.size(M):].copy()
 
     def events(self, mode):
+        mode = tuple(mode)
+        out = self._per_mode.get(mode)
+        if out is None:  # (made once a mode: its events are frozen)
+            out = self._per_mode[mode] = self._events(mode)
+        return out
+
+    def _events(self, mode):
+        """:meth:`events`, made."""
         target, moving = mode[:2]
         acc, rel = self._flags(mode)
         sp, ps = self.layout["spool"], self.layout.supply
@@ -484,14 +513,25 @@ class HydraulicCircuitDrive(Drive):
         if name == _RAMP:
             z[self.layout["spool"]] = float(target)
             return DriveState((target, 0, *mode[2:]), z)
-        if name in self._composition.events:  # (its flag toggled: acc, rel, an extra part's)
-            i = 1 + self._composition.events.index(name)
+        i = self._event_flags.get(name)
+        if i is not None:  # (its flag toggled: acc, rel, an extra part's)
             flag = 1 - mode[i]
-            for part in self.extra_parts:  # (its part's say on the flag and the state)
-                if name in part.events:
-                    flag, z = part.at_event(name, flag, z, self.layout)
+            for part in self._event_parts.get(name, ()):  # (its part's say on the flag and the state)
+                flag, z = part.at_event(name, flag, z, self.layout)
             return DriveState((*mode[:i], flag, *mode[i + 1:]), z)
         raise ValueError(f"unknown event {name!r} of the oil circuit")  # pragma: no cover
+
+    @functools.cached_property
+    def _event_flags(self) -> dict:
+        """Each event's flag in the mode (``1 +`` its slot in the network's events), by its name."""
+        events = self._composition.events
+        return {name: 1 + events.index(name) for name in events}
+
+    @functools.cached_property
+    def _event_parts(self) -> dict:
+        """The extra parts that own each event, by its name (:meth:`jump`), in their order."""
+        names = {name for part in self.extra_parts for name in part.events}
+        return {name: tuple(p for p in self.extra_parts if name in p.events) for name in names}
 
     def impact(self, mode, z, t, q, v) -> DriveState:
         if self.valve.switch_in is not None or self._stand_in:
@@ -628,66 +668,3 @@ class HydraulicCircuitDrive(Drive):
         ``(p_s (1 - alpha), alpha p_s - p_t)``."""
         a = self.chambers.area_ratio
         return supply_pressure * (1.0 - a), a * supply_pressure - self.supply.tank_pressure
-
-
-class _RateModel:
-    """The little of a uniform bar's model that :meth:`HydraulicCircuitDrive.rate` needs (the
-    drives sit below :class:`~impactbar.BarModel`): the mode count and the ends' weights."""
-
-    def __init__(self, M):
-        self.n_modes, self.d, self.s = M - 1, 0.0, 1.0
-        n = np.arange(M)
-        self.end_weights = np.where(n == 0, 1.0, 2.0 * (-1.0) ** n)
-        self.frequencies = np.pi * n
-        self.drive_weights = np.where(n == 0, 1.0, 2.0)
-
-
-@functools.lru_cache(maxsize=64)
-def _network_code(drive: HydraulicCircuitDrive, mode: tuple):
-    """:meth:`HydraulicCircuitDrive._compiled_network`, kept (the network's composition and the
-    generated module's look-up take some 100 microseconds, against a flight's milliseconds)."""
-    from . import _netgen
-
-    net = drive._network(mode)
-    return net, _netgen.generate(net)
-
-
-@functools.lru_cache(maxsize=16)
-def _rate_model(M: int) -> _RateModel:
-    """One :class:`_RateModel` per mode count (by identity a key of :func:`_par_base`'s cache,
-    built once rather than at every call of the vector field)."""
-    return _RateModel(M)
-
-
-@functools.lru_cache(maxsize=64)
-def _par_base(drive: HydraulicCircuitDrive, model) -> np.ndarray:
-    """The parameter vector of the compiled kernels (:mod:`._bar`) for a drive and a bar (its
-    struck end's weights, squared frequencies and driven end's weights: a stepped piston's too)."""
-    M = model.n_modes + 1
-    d = float(model.d)
-    ch, va, su, oil, acc = drive.chambers, drive.valve, drive.supply, drive.oil, drive.accumulator
-    par = np.zeros(K.HEAD + 3 * M)
-    par[K.ALPHA], par[K.NUR], par[K.NUF] = ch.area_ratio, ch.rear_volume, ch.front_volume
-    par[K.KV], par[K.KF] = va.coefficient, su.front_coefficient
-    par[K.QP] = su.pump_flow if su.pump_flow is not None else 0.0
-    par[K.NUS], par[K.PT] = su.hose_volume, su.tank_pressure
-    par[K.PREL] = su.relief_pressure if math.isfinite(su.relief_pressure) else 1e300
-    par[K.KREL] = su.relief_coefficient
-    has_acc = acc is not None and acc.volume > 0 and not su.held
-    par[K.P0] = acc.precharge if acc is not None else 1.0
-    par[K.NU0] = acc.volume if has_acc else 0.0
-    par[K.NPOL] = acc.polytropic_exponent if acc is not None else 1.4
-    par[K.BETA], par[K.PTR2] = oil.bulk_modulus, oil.transition_pressure ** 2
-    par[K.HELD] = 1.0 if su.held else 0.0
-    par[K.PSH] = su.pressure if su.held else 0.0
-    par[K.XOUT] = va.switch_out
-    par[K.XIN] = va.switch_in if va.switch_in is not None else -1.0
-    par[K.DAMP] = d
-    par[K.NM] = float(M)
-    par[K.HASREL] = 1.0 if su.has_relief and not su.held else 0.0
-    par[K.HASACC] = 1.0 if has_acc else 0.0
-    par[K.HEAD:K.HEAD + M] = model.end_weights
-    par[K.HEAD + M:K.HEAD + 2 * M] = model.frequencies ** 2
-    par[K.HEAD + 2 * M:K.HEAD + 3 * M] = model.drive_weights
-    par.flags.writeable = False
-    return par

@@ -380,7 +380,7 @@ def _end_directions(drive, mode) -> tuple:
 
 def _check_volumes(drive, w, t) -> None:
     ch = drive.chambers
-    rear, front = ch.rear_volume - float(w.max()), ch.front_volume + ch.area_ratio * float(w.min())
+    rear, front = ch.least_volumes(w)
     if rear <= 0.0 or front <= 0.0:
         which = "rear" if rear <= 0.0 else "front"
         raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "

@@ -372,8 +372,10 @@ def magnus_state_settings(settings: FlightSettings | None) -> CircuitFlightSetti
 _LAST = threading.local()
 
 
+@functools.lru_cache(maxsize=2)
 def _compiled_driver(compiled: bool = True):
-    """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
+    """:mod:`._cvode` where ``compiled`` and the libraries bind, else None (asked once: the libraries
+    bind once in a process, :func:`._sundials.bind`)."""
     if not compiled:
         return None
     from . import _sundials
@@ -393,7 +395,8 @@ def _message(flag) -> str:
 
 def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, directions, y0, t, end,
                         keep):
-    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (``band``: the
+    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (the message
+    None, :func:`_message` of the flag when it is wanted; ``band``: the
     variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
     solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``adams``: Adams-Moulton's
     method, else BDF; ``n_energy`` the energy integrands after the ``n`` states; ``code``: the
@@ -406,7 +409,7 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
-    return int(flag), _message(flag), ts, Y, yend, np.flatnonzero(roots)
+    return int(flag), None, ts, Y, yend, np.flatnonzero(roots)
 
 
 def _integrate_explicit(code, par, settings, directions, y0, end, keep, spacing):
@@ -484,7 +487,7 @@ def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep)
         events(t, y, g, par)
 
     ev.terminal = [True] * n_events
-    ev.direction = list(directions)
+    ev.direction = [int(d) for d in directions]
     solver = CVODE(f, method="Adams" if adams else "BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf,
                    eventsfn=ev, num_events=n_events, max_num_steps=_MAX_STEPS)
     with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
@@ -591,18 +594,19 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         settings = magnus_state_settings(settings)
     L = drive.layout
     n, n_energy = L.size(M), L.n_energy
-    par = drive._par(model, mode, variational)
-    code = kernels
-    if generated:
-        net, code = drive._compiled_network(mode)
-        par = np.concatenate((par, net))
+    if generated:  # (made once per drive, bar and mode: never written; the piece's c its own)
+        par, code, directions, c, weights = drive._flight_data(model, mode, variational)
+        c = c.copy()
+    else:
+        par, code, directions = drive._par(model, mode, variational), kernels, drive._directions(mode)
+        c, weights = model.end_weights, model.drive_weights
     field_at = code.field_at
     y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
     if variational:
         y0 = np.concatenate((y0, (np.eye(n) if start is None else start).T.ravel()))
     end = t_stop if math.isfinite(t_stop) else t + 1e4
     if end <= t:
-        piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, model.end_weights,
+        piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, c,
                              drive.chambers.area_ratio, L, field_at)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       (np.eye(n) if start is None else start) if variational or magnus else None)
@@ -611,7 +615,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
     explicit = not variational and uses_dop853(multistep, drive, model, generated)
     if explicit:
-        status, message, ts, Y, yend, hit = _integrate_explicit(code, par, settings, drive._directions(mode),
+        status, message, ts, Y, yend, hit = _integrate_explicit(code, par, settings, directions,
                                                                 y0, end - t, keep,
                                                                 keep_spacing(drive, model, settings.rtol))
     else:
@@ -620,19 +624,18 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         cv = _compiled_driver(compiled)
         integrate = functools.partial(_integrate_binding, adams, code) if cv is None \
             else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
-        status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0,
-                                                      end - t, keep)
+        status, message, ts, Y, yend, hit = integrate(par, settings, directions, y0, 0.0, end - t, keep)
         _LAST.method = "adams" if adams else "bdf"
     if status < 0 or not np.all(np.isfinite(yend)):
-        raise ValueError(drive._failure(model, message, t))
+        raise ValueError(drive._failure(model, _message(status) if message is None else message, t))
     own = ts  # (the flight's own time, from 0)
     ts = ts + t
-    keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
-    if not keep_t.all():  # (else no copy: the kept points of a period are megabytes)
+    later = ts[1:] > ts[:-1]  # (not at a repeated point at an event)
+    if not later.all():  # (else no copy: the kept points of a period are megabytes)
+        keep_t = np.concatenate(([True], later))
         ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
-    piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio,
-                         L, field_at)
-    drive._check_volumes(model, piece, t)
+    piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, c, drive.chambers.area_ratio, L, field_at)
+    drive._check_volumes(weights, piece, t)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
@@ -644,7 +647,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
             Phi = Phi @ start
     if status == 2:
         if ARRIVAL_EV in hit:
-            qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
+            qe[0] -= float(c @ qe)  # exactly on the stop
             return Flight(te, qe, ve, ze, ARRIVAL, (), piece, Phi)
         fired = drive._fired(mode, hit)
         if fired:

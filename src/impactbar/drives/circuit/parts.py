@@ -75,6 +75,30 @@ class Chambers:
                                                           lo_open=True, hi_open=True))
         _positive(self, "rear_volume", "front_volume")
 
+    def least_volumes(self, w) -> tuple[float, float]:
+        """The least rear and front volumes over the driven end's displacements ``w`` (theory §11):
+        ``V_r`` at the greatest ``w``, ``V_f`` at the least. Rounding is monotone and
+        ``area_ratio > 0``, so these are the least of ``rear_volume - w`` and
+        ``front_volume + area_ratio w`` over ``w`` to the bit, without those arrays.
+
+        Parameters
+        ----------
+        w : numpy.ndarray
+            The displacements away from the stop (model length units), at least one.
+
+        Returns
+        -------
+        rear, front : float
+            In the volumes' units (``A_r L``).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> Chambers(0.5, 0.4, 0.2).least_volumes(np.array([-0.1, 0.3]))
+        (0.10000000000000003, 0.15000000000000002)
+        """
+        return self.rear_volume - float(w.max()), self.front_volume + self.area_ratio * float(w.min())
+
     def records(self, front: int, rear: int, bulk_modulus: float, front_energy: int = -1,
                 rear_energy: int = -1) -> list:
         """The chambers as network records (:mod:`._network`): the front and rear nodes (their dead

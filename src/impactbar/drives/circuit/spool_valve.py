@@ -207,7 +207,13 @@ class SpoolValve(NamedPart):
     @property
     def events(self) -> tuple:
         n = self.name  # (the valve's ramp's end first, its slot kept: never armed)
-        return ("ramp_end", f"{n}_stop", f"{n}_open_p", f"{n}_open_t", *(f"{n}_pilot{i}" for i in range(4)))
+        return ("ramp_end", self.stop_event, f"{n}_open_p", f"{n}_open_t",
+                *(f"{n}_pilot{i}" for i in range(4)))
+
+    @property
+    def stop_event(self) -> str:
+        """The name of the spool's arrival at a stop (its event, :meth:`at_event`)."""
+        return f"{self.name}_stop"
 
     @property
     def pilot_gaps(self) -> tuple:
@@ -219,8 +225,7 @@ class SpoolValve(NamedPart):
     def at_event(self, event, flag, z, layout):
         """At the spool's arrival at a stop (``<name>_stop`` to 1): the spool put on the stop at rest,
         and left free where the force already points away from it."""
-        _, stop, *_ = self.events
-        if event != stop or flag != 1:
+        if flag != 1 or event != self.stop_event:
             return flag, z
         z = np.array(z, dtype=float)
         x = 1.0 if z[layout["spool"]] >= 0.5 else 0.0
