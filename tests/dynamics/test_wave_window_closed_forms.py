@@ -120,7 +120,7 @@ def test_one_compiled_call_for_many_starts_is_each_start_to_the_bit(load):
     jumps = np.empty(0)
     mc, ms = np.zeros((t0s.size, 2, M)), np.zeros((t0s.size, 2, M))
     KW.window_moments(view, s, 1.7, t0s, jumps, _GL_X, _GL_W, mc, ms)
-    for i, t0 in enumerate(t0s):
+    for i in range(t0s.size):
         c1, s1 = np.zeros((1, 2, M)), np.zeros((1, 2, M))
         KW.window_moments(view, s, 1.7, t0s[i:i + 1], jumps, _GL_X, _GL_W, c1, s1)
         assert np.array_equal(mc[i], c1[0]) and np.array_equal(ms[i], s1[0])
