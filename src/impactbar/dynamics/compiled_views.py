@@ -69,7 +69,8 @@ class LoadKernelView(NamedTuple):
         ks = np.array(ks, dtype=float)
         pk = np.asarray(pk, dtype=complex)
         if ks.size == 1:  # one harmonic (the pneumatic load, eq. 33): the sums below of one term
-            k, p, a1 = float(ks[0]), complex(pk[0]), float(np.abs(pk[0]))
+            (k,), (p,) = ks.tolist(), pk.tolist()
+            a1 = float(np.abs(p))
             return cls(0, float(p0), ks, np.array([p.real]), np.array([p.imag]), np.zeros(1), np.zeros(1),
                        abs(float(p0)) + a1, k * a1, k * k * a1, k**3 * a1, a1, 0.0)
         a = np.abs(pk)

@@ -81,8 +81,8 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact
     elif view is not None:  # the compiled quadrature (the same panels)
-        (ca, cb), (sa, sb) = (m[0] for m in _kernel_moments(tuple(view), s, wl.rate, [t0], wl.jumps,
-                                                               n_modes + 1))
+        (mc,), (ms,) = _kernel_moments(tuple(view), s, wl.rate, [t0], wl.jumps, n_modes + 1)
+        (ca, cb), (sa, sb) = mc, ms
     else:
         h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)
         out = {}
