@@ -161,6 +161,28 @@ def test_kernel_view_holds_the_load(cls):
         assert a.flags.writeable and a.flags.c_contiguous and a.dtype == float
 
 
+@pytest.mark.parametrize("k", [1, 3, 10, 4096])
+@pytest.mark.parametrize("pk", [1.0, -0.37, 2.5e-7, 3.0 - 4.0j])
+def test_a_one_harmonic_view_is_the_sums_of_numpy_to_the_bit(k, pk):
+    """The view of one harmonic (the pneumatic load's, made for every load factor of a chart) holds
+    what numpy's sums over the harmonics give, to the bit: the kernels' bounds (and so every result
+    that passes through them) do not depend on which way the view was made."""
+    ks, pks = np.array([float(k)]), np.array([pk], dtype=complex)
+    view = LoadKernelView.fourier(-0.6, ks, pks)
+    a = np.abs(pks)
+    want = (0.6 + float(np.sum(a)), float(np.sum(ks * a)), float(np.sum(ks**2 * a)), float(np.sum(ks**3 * a)),
+            float(np.sum(a)))
+    got = (view.psup, view.p1, view.p2, view.p3, view.posc)
+    assert [g.hex() for g in got] == [w.hex() for w in want]
+    assert (view.kind, view.p0, view.spread) == (0, -0.6, 0.0)
+    assert view.pr.tolist() == [complex(pk).real] and view.pim.tolist() == [complex(pk).imag]
+    for arr in view[2:7]:
+        assert arr.flags.writeable and arr.flags.c_contiguous and arr.dtype == float
+    assert view.ks is not ks  # a private copy
+    two = LoadKernelView.fourier(-0.6, [1.0, float(k)], [0.5, pk])  # the general sums
+    assert two.p1 == pytest.approx(0.5 + k * abs(pk), rel=1e-15)
+
+
 def test_no_compiled_kernel_takes_more_than_12_arguments():
     counts = {name: len(inspect.signature(d.py_func).parameters) for name, d in _dispatchers()}
     assert len(counts) > 40

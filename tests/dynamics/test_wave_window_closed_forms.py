@@ -90,8 +90,10 @@ def test_compiled_moments_of_a_piecewise_constant_drive_against_quad(n):
         for s, t0 in ((0.35, 0.1), (3.0, 2.5), (10.0, 6.2), (33.0, 1.38)):
             wl = _WindowLoad(load, s, t0)
             jumps = np.ascontiguousarray(wl.jumps)
-            mc, ms = np.zeros((2, n + 1)), np.zeros((2, n + 1))
-            KW.window_moments(tuple(load.kernel_view), s, 0.0, t0, jumps, _GL_X, _GL_W, mc, ms)
+            mc, ms = np.zeros((1, 2, n + 1)), np.zeros((1, 2, n + 1))
+            KW.window_moments(tuple(load.kernel_view), s, 0.0, np.array([t0]), jumps, _GL_X, _GL_W,
+                              mc, ms)
+            mc, ms = mc[0], ms[0]
 
             def drive(th, load=load, s=s, t0=t0):
                 return float(load(t0 + th / s))
@@ -104,6 +106,25 @@ def test_compiled_moments_of_a_piecewise_constant_drive_against_quad(n):
                         ref = sum(quad(drive, a, b, weight=weight, wvar=k * math.pi, epsabs=1e-14)[0]
                                   for a, b in zip(edges[:-1], edges[1:], strict=True))
                         assert got == pytest.approx(ref, abs=1e-13)
+
+
+@pytest.mark.parametrize("load", LOADS[:2], ids=lambda x: type(x).__name__)
+def test_one_compiled_call_for_many_starts_is_each_start_to_the_bit(load):
+    """The moments of many windows (a load without jumps) in one compiled call: each start's
+    moments as the call for that start alone gives them, to the bit, in that start's rows."""
+    from impactbar.laws.wave._characteristics import _GL_W, _GL_X
+
+    s, M = 3.0, 9
+    t0s = 2.0 * math.pi * np.arange(7) / 7 + 0.3
+    view = tuple(load.kernel_view)
+    jumps = np.empty(0)
+    mc, ms = np.zeros((t0s.size, 2, M)), np.zeros((t0s.size, 2, M))
+    KW.window_moments(view, s, 1.7, t0s, jumps, _GL_X, _GL_W, mc, ms)
+    for i in range(t0s.size):
+        c1, s1 = np.zeros((1, 2, M)), np.zeros((1, 2, M))
+        KW.window_moments(view, s, 1.7, t0s[i:i + 1], jumps, _GL_X, _GL_W, c1, s1)
+        assert np.array_equal(mc[i], c1[0]) and np.array_equal(ms[i], s1[0])
+        assert np.all(np.abs(c1[0, :, 0] - (mc[i - 1, :, 0] if i else 0.0)) > 0.0)  # each its own
 
 
 @pytest.mark.parametrize("load", LOADS, ids=lambda x: type(x).__name__)

@@ -68,6 +68,11 @@ class LoadKernelView(NamedTuple):
         """The view of ``p0 + Re sum p_k exp(i k t)`` (orders ``ks``, complex ``pk``)."""
         ks = np.array(ks, dtype=float)
         pk = np.asarray(pk, dtype=complex)
+        if ks.size == 1:  # one harmonic (the pneumatic load, eq. 33): the sums below of one term
+            (k,), (p,) = ks.tolist(), pk.tolist()
+            a1 = float(np.abs(p))
+            return cls(0, float(p0), ks, np.array([p.real]), np.array([p.imag]), np.zeros(1), np.zeros(1),
+                       abs(float(p0)) + a1, k * a1, k * k * a1, k**3 * a1, a1, 0.0)
         a = np.abs(pk)
         # private writable copies: a read-only array would be another numba type (and compilation)
         return cls(0, float(p0), ks, np.array(pk.real, dtype=float), np.array(pk.imag, dtype=float),

@@ -10,6 +10,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE, TWO_PI, load_value, piece_of, sort_head
 from ...dynamics.compiled_views import LoadKernelView
 
@@ -110,10 +111,15 @@ def _window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
-    """:func:`_window_moments` called from Python, with ``load`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _window_moments(LoadKernelView(*load), s, rate, t0, jumps, gl_x, gl_w, ic_, is_)
+def window_moments(load, s, rate, t0s, jumps, gl_x, gl_w, ic_, is_):
+    """:func:`_window_moments` called from Python for the windows starting at each of ``t0s``
+    (shape (P,)), each start's moments added to ``ic_[i], is_[i]`` (shape (P, 2, M)), with ``load``
+    as plain tuples (``tuple(view)``: numba dispatches them several times faster than named
+    tuples). One call for all the starts of a load: the dispatch, not the moments, was most of a
+    call with one start."""
+    view = LoadKernelView(*load)
+    for i in range(t0s.size):
+        _window_moments(view, s, rate, t0s[i], jumps, gl_x, gl_w, ic_[i], is_[i])
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -205,3 +211,8 @@ def wave_window(load_t, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
         g0 += c[n] * qa[n]
     qa[0] = -g0
     return True
+
+
+# the window's helpers only kernels call are link-only (their callers hold their code): a first run
+# compiles each once, inside the kernel that calls it, not also alone
+internal_kernels(globals(), python=("window_moments", "wave_window", "scan_step"))

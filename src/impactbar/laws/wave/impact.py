@@ -81,7 +81,8 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact
     elif view is not None:  # the compiled quadrature (the same panels)
-        (ca, cb), (sa, sb) = _kernel_moments(tuple(view), s, wl.rate, t0, wl.jumps, n_modes + 1)
+        (mc,), (ms,) = _kernel_moments(tuple(view), s, wl.rate, [t0], wl.jumps, n_modes + 1)
+        (ca, cb), (sa, sb) = mc, ms
     else:
         h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)
         out = {}
@@ -110,11 +111,12 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
 _CLOSED_FROM = 48
 
 
-def _kernel_moments(view: tuple, s: float, rate: float, t0: float, jumps, M: int):
-    """The compiled quadrature's moments ``(cos (2, M), sin (2, M))`` of :func:`window_drive`, the
-    load's kernel view as a plain tuple."""
-    mc, ms = np.zeros((2, M)), np.zeros((2, M))
-    KW.window_moments(view, s, rate, t0, np.ascontiguousarray(jumps), _GL_X, _GL_W, mc, ms)
+def _kernel_moments(view: tuple, s: float, rate: float, t0s, jumps, M: int):
+    """The compiled quadrature's moments ``(cos (P, 2, M), sin (P, 2, M))`` of :func:`window_drive`
+    at the ``P`` starts ``t0s``, in one compiled call, the load's kernel view as a plain tuple."""
+    t0s = np.array(t0s, dtype=float).ravel()
+    mc, ms = np.zeros((t0s.size, 2, M)), np.zeros((t0s.size, 2, M))
+    KW.window_moments(view, s, rate, t0s, np.ascontiguousarray(jumps), _GL_X, _GL_W, mc, ms)
     return mc, ms
 
 
@@ -131,8 +133,9 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
 
     The same numbers as :func:`window_drive` start by start, to the bit; under a load with a
     compiled view and no jumps, and fewer than ``_CLOSED_FROM`` modes (the compiled quadrature),
-    what does not depend on the start (the view, the load's rate, ``n pi``) is set up once and the
-    drive's parts come from the moments of all starts at once (the phase series of
+    what does not depend on the start (the view, the load's rate, ``n pi``) is set up once, the
+    moments of all starts come from one compiled call and the drive's parts from them at once (the
+    phase series of
     :mod:`impactbar.laws.wave.periodic` takes ``2 K + 1`` starts per load).
 
     Parameters
@@ -154,10 +157,8 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
         return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
                 np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
     first, *_ = t0s.tolist()  # (the load's rate does not depend on the start)
-    view, rate, none = tuple(own.kernel.view), _WindowLoad(load, s, first).rate, np.empty(0)
-    mc, ms = np.empty((t0s.size, 2, n_modes + 1)), np.empty((t0s.size, 2, n_modes + 1))
-    for i, t0 in enumerate(t0s.tolist()):
-        mc[i], ms[i] = _kernel_moments(view, s, rate, t0, none, n_modes + 1)
+    view, rate = tuple(own.kernel.view), _WindowLoad(load, s, first).rate
+    mc, ms = _kernel_moments(view, s, rate, t0s, np.empty(0), n_modes + 1)
     (ca, cb), (sa, sb) = np.moveaxis(mc, 1, 0), np.moveaxis(ms, 1, 0)  # by the moments' order, start by start
     return _drive_parts(s, R, math.pi * np.arange(n_modes + 1), ca, cb, sa, sb)
 
