@@ -59,6 +59,9 @@ def test_a_design_without_an_orbit_costs_about_what_one_with_an_orbit_costs(monk
     assert n_fail <= 3 * n_ok, (n_fail, n_ok)  # 64 against 35 blows
     quoted = re.search(r"solves ([0-9]+) coupled blows against ([0-9]+) for its neighbour", _page())
     assert quoted is not None and (int(quoted[1]), int(quoted[2])) == (n_fail, n_ok)
+    quoted = re.search(r"Newton's steps circle at ([0-9.]+e-[0-9]+) \(relative\)", _page())
+    stalled = re.search(r"smallest before it, ([0-9.]+e-[0-9]+) relative", str(err))
+    assert quoted is not None and float(quoted[1]) == pytest.approx(float(stalled[1]), rel=0.05)
 
 
 def test_a_design_whose_motion_from_rest_alternates_hands_newton_its_start_at_once(monkeypatch):
