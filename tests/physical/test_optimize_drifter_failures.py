@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -22,6 +23,11 @@ from impactbar.physical.optimize_failures import (
 )
 
 pytest.importorskip("pint")
+
+
+def _page() -> str:
+    """docs/optimising_a_drifter.md, its whitespace runs one space (the figures it quotes here)."""
+    return re.sub(r"\s+", " ", (EXAMPLE.parents[1] / "docs" / "optimising_a_drifter.md").read_text())
 
 
 def _blows(monkeypatch, changes: dict):
@@ -51,6 +57,11 @@ def test_a_design_without_an_orbit_costs_about_what_one_with_an_orbit_costs(monk
     # where before the chord and then Newton's method took their 50 steps each (907 blows, 15 s)
     assert isinstance(err, ValueError) and "Newton stalled" in str(err)
     assert n_fail <= 3 * n_ok, (n_fail, n_ok)  # 64 against 35 blows
+    quoted = re.search(r"solves ([0-9]+) coupled blows against ([0-9]+) for its neighbour", _page())
+    assert quoted is not None and (int(quoted[1]), int(quoted[2])) == (n_fail, n_ok)
+    quoted = re.search(r"Newton's steps circle at ([0-9.]+e-[0-9]+) \(relative\)", _page())
+    stalled = re.search(r"smallest before it, ([0-9.]+e-[0-9]+) relative", str(err))
+    assert quoted is not None and float(quoted[1]) == pytest.approx(float(stalled[1]), rel=0.05)
 
 
 def test_a_design_whose_motion_from_rest_alternates_hands_newton_its_start_at_once(monkeypatch):
@@ -105,6 +116,8 @@ def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_
     motion = rec["motion"]
     assert motion["period_blows"] == 3 and motion["chatter_per_blow"] == 0.0 and motion["n_blows"] == 160
     assert rec["motion_summary"].startswith("settles into a period-3 motion (3 blows per cycle, 0.07")
+    quoted = re.search(r'over 160 blows it "(settles into a period-3 motion[^"]*)"', _page())
+    assert quoted is not None and quoted[1] == rec["motion_summary"]
     run = build(with_values(cfg, changes), folder).simulate(motion["simulated_time"] * (1 + 1e-9),
                                                             histories=False)
     t, v = run["impact_times_s"], run["impact_velocities_m_s"]

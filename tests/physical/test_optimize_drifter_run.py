@@ -272,6 +272,13 @@ def test_slsqp_keeps_its_better_design_along_an_active_cap():
     assert res.gain > 0.10
     c = res.optimum["constraints"]["mean_supply_pressure"]
     assert c["value"] <= 23.706e6 * (1 + 1e-8) and res.optimum["feasible"]
+    # as the page quotes them: the miss in pascals and of the cap, the gain
+    text = re.sub(r"\s+", " ", (ROOT / "docs" / "optimising_a_drifter.md").read_text())
+    m = re.search(r"misses the cap by ([0-9.]+) Pa, ([0-9]e-[0-9]+) of it, and gains ([0-9.]+) %", text)
+    assert m is not None, "the page's quote of this search is gone; update this test with the text"
+    assert float(m[1]) == pytest.approx(c["value"] - 23.706e6, abs=5e-4)
+    assert float(m[2]) == pytest.approx(c["value"] / 23.706e6 - 1.0, rel=0.2)
+    assert float(m[3]) == pytest.approx(100.0 * res.gain, abs=0.05)
     # and a design of more power that missed the cap by more is said why it was not kept
     assert "missed a constraint, the nearest mean_supply_pressure by" in res.message
 

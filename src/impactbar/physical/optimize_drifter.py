@@ -177,8 +177,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         drifter, its line search backtracks at every step: there COBYLA), or a
         population's (:mod:`~impactbar.physical.optimize_population`: the constraints a penalty, each
         generation's designs evaluated together on ``workers``, each by a fresh ``orbit()``;
-        ``max_evaluations`` bounds its generations, at least two), or COBYLA from the best feasible
-        designs of a Sobol sample evaluated together (:mod:`~impactbar.physical.optimize_multistart`).
+        ``max_evaluations`` bounds its designs, in whole generations, at least two), or COBYLA from
+        the best feasible designs of a Sobol sample evaluated together
+        (:mod:`~impactbar.physical.optimize_multistart`).
         A valve drifter: not SLSQP, and the multistart with ``polish=0`` (their gradients are the
         oil circuit's); its certificate's gradients central differences of fresh orbits.
     workers : None, int or distributed.Client
