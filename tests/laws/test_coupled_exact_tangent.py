@@ -9,7 +9,7 @@ from coupled_reference import drifter_arrival
 
 from impactbar.drives.base import DriveState
 from impactbar.laws.rodrock.coupled_tangent import coupled_blow_tangent
-from impactbar.orbits.coupled import blow_state
+from impactbar.orbits.coupled import blow_jacobian, blow_state
 
 #: the differences' steps, relative to the modal and the drive's components' largest sizes
 STEPS = (1e-3, 3e-4)
@@ -80,3 +80,26 @@ def test_what_the_tangent_does_not_cover_is_none(blow):
         coupling = None
 
     assert coupled_blow_tangent(model, drive, res._replace(record=Bare()), after, state) is None
+
+
+def test_the_blows_jacobian_is_the_tangent_else_the_differences(blow, monkeypatch):
+    """``blow_jacobian`` (the multipliers' Jacobian) is the law's tangent where the blows are exact
+    and the tangent covers the blow, to the bit; where the law has none for the blow, the central
+    differences: two blows a column but ``q_0``'s."""
+    import impactbar as ib
+    import impactbar.orbits.coupled as OC
+
+    arrival, (y, res, after), G = blow
+    model, drive, state, t0, q, v = arrival
+    np.testing.assert_array_equal(blow_jacobian(model, drive, t0, q, v, state, blow=(res, after)), G)
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return y, res, after
+
+    monkeypatch.setattr(ib.RodRock, "driven_tangent", lambda self, *args: None)
+    monkeypatch.setattr(OC, "blow_state", counted)
+    differenced = blow_jacobian(model, drive, t0, q, v, state, blow=(res, after))
+    assert len(calls) == 2 * (y.size - 1)
+    assert np.all(differenced == 0.0)  # (every blow the same here: no difference)

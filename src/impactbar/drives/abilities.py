@@ -114,9 +114,10 @@ class DriveAbilities:
         (``int p dt`` over each interval), ``pieces`` and ``events`` (the oil circuit's
         ``EndFlight``). A drive with state without it runs under an instantaneous law only.
     end_tangent : callable or None
-        ``end_tangent(pieces, events, mode, breaks, incoming, impedance, t0)``: the variational
+        ``end_tangent(pieces, events, mode, breaks, splines, impedance, t0)``: the variational
         equations of the drive's state along the blow's flight (``pieces`` and ``events`` of an
-        ``end_flight``), for the coupled blow's tangent (the oil circuit's
+        ``end_flight``, ``splines`` its wave ``a`` as a cubic spline ``(x, c, t0)`` on each interval,
+        ``t0`` the impact's time), for the coupled blow's tangent (the oil circuit's
         :class:`~impactbar.drives.circuit.endtangent.EndTangent`); ``None``: the coupled blow's
         Jacobian by differences.
     border_tests : callable or None

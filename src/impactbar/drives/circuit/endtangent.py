@@ -126,9 +126,9 @@ class EndTangent:
         The circuit's mode over the blow.
     breaks : numpy.ndarray, shape (m + 1,)
         The flight's breaks (model times).
-    incoming : list of callables
-        The primal wave ``a`` on each interval, each with its ``spline`` (``(x, c, t0)``, as the coupled
-        exact blow's: :mod:`._endcvode`).
+    splines : list of tuple
+        The primal wave ``a`` on each interval, a cubic spline ``(x, c, t0)`` (the coupled exact blow's
+        callables' ``spline``: :mod:`._endcvode`).
     impedance : float
         ``Z > 0`` of the piston's driven end (model units).
     t0 : float
@@ -143,7 +143,7 @@ class EndTangent:
         Where the flight has events inside it (``events`` not empty).
     """
 
-    def __init__(self, drive, pieces, events, mode, breaks, incoming, impedance, t0, one_mode):
+    def __init__(self, drive, pieces, events, mode, breaks, splines, impedance, t0, one_mode):
         from .endflight import _end_code
 
         if events:
@@ -153,7 +153,7 @@ class EndTangent:
         self.iz = 1.0 / float(impedance)
         self.t0 = float(t0)
         self.bt = np.asarray(breaks, dtype=float) - self.t0
-        self.incoming = incoming
+        self.splines = splines
         self.pieces = [p for p in pieces if p.t.size >= 2]
         self.starts = np.array([p.t0 for p in self.pieces]) - self.t0
         self.steps = np.unique(np.concatenate([p.t - self.t0 for p in self.pieces]))
@@ -211,7 +211,7 @@ class EndTangent:
         dav = np.empty((flat.size, K))
         for j in np.unique(k):
             sel = k == j
-            ext[sel, EK.EXT_A] = _spline_values(self.incoming[j].spline, self.t0 + flat[sel])
+            ext[sel, EK.EXT_A] = _spline_values(self.splines[j], self.t0 + flat[sel])
             dav[sel] = da[j](flat[sel]).T
         J = np.empty((flat.size, self.n, self.n))
         fa = np.empty((flat.size, self.n))

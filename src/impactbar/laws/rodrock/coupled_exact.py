@@ -108,14 +108,15 @@ class Coupling(NamedTuple):
     ----------
     breaks : numpy.ndarray
         The flight's breaks (model times).
-    incoming : list of callables
-        The wave ``a`` on each interval (:meth:`_Incoming.callables`).
+    splines : list of tuple
+        The wave ``a`` on each interval, its callable's ``spline`` ``(x, c, t0)``
+        (:meth:`_Incoming.callables`; the arrays kept, not the callables' lists).
     impedance : float
         ``Z_0`` of the piston's driven end (model units).
     """
 
     breaks: np.ndarray
-    incoming: list
+    splines: list
     impedance: float
 
 
@@ -406,7 +407,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
     rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
-    rec.coupling = Coupling(breaks, incoming, Z0)  # (the blow's tangent: coupled_tangent)
+    rec.coupling = Coupling(breaks, [a.spline for a in incoming], Z0)  # (the blow's tangent: coupled_tangent)
     work = float(sum(p.piston_work() for p in fl.pieces))
     gaps = _rigid_gaps(ex, force, q, v, t0, breaks.size - 1)
     return DrivenContact(q_after.copy(), v_after.copy(), t0 + ex.duration, rec, fl.state, fl.pieces,

@@ -81,7 +81,7 @@ def coupled_blow_tangent(model, drive, res, after, state, settings=None):
     ws, scale = primal
     _, _, on_stop = EJ._plus(bmap, ws, scale)
     t0 = float(bmap.t0)
-    et = make(res.pieces, res.events, state.mode, coupling.breaks, coupling.incoming, coupling.impedance, t0)
+    et = make(res.pieces, res.events, state.mode, coupling.breaks, coupling.splines, coupling.impedance, t0)
     basis = bmap.basis
     T0, Z0 = float(basis.travel[0]), float(coupling.impedance)
     M, k = q.size, state.z.size
@@ -96,7 +96,7 @@ def coupled_blow_tangent(model, drive, res, after, state, settings=None):
     dp0 = et.force(x0)
     waves = initial_waves(basis, dq0, dv0, dp0)
     # the samples of the primal's a, a hair inside their intervals (its callables')
-    xs = [x + (ts - t0) for x, _, ts in (a.spline for a in coupling.incoming)]
+    xs = [x + (ts - t0) for x, _, ts in coupling.splines]
     inside = [np.concatenate(([INSIDE * T0], np.zeros(x.size - 2), [-INSIDE * T0])) for x in xs]
     allx = np.concatenate([x + d for x, d in zip(xs, inside, strict=True)])
     cuts = np.cumsum([x.size for x in xs])[:-1]
