@@ -89,6 +89,8 @@ NOT_RECORDS = {
     "laws/rodrock/contact.py": {"qa"},  # the rigid mode
     "laws/rodrock/coupled.py": {"column"},  # the far end's cell
     "laws/rodrock/coupled_exact.py": {"travel", "xv"},  # the first segment's; a grid's ends
+    "laws/rodrock/coupled_tangent.py": {"travel", "c", "y_end"},  # the first segment's; the rigid
+    # mode's weight; the last piece's end
     "laws/rodrock/exact.py": {"Zp", "Zr"},  # the last segment's impedance
     # c: a piece's coefficient array (a piecewise load's constant); the first piece, start and initial
     # wave; the rigid mode
@@ -710,6 +712,7 @@ NOT_COLUMN_RECORDS = {
     "laws/rodrock/contact.py": {"Nq": RIGID, "amp": COEFFS, "modes.shapes(np.zeros(1))": RIGID, "xe": GRID},
     "laws/rodrock/coupled.py": {"field": CELLS},
     "laws/rodrock/coupled_exact.py": {"c": COEFFS},
+    "laws/rodrock/coupled_tangent.py": {"cubic": COEFFS, "dq0": RIGID},
     "laws/rodrock/exactjac.py": {"dq": RIGID, "jac": MATRIX},
     "laws/rodrock/exactmap.py": {"Im": RIGID, "Ip": RIGID, "a": RIGID, "b": RIGID, "modes.amplitudes": COEFFS,
                                  "q": RIGID, "v": RIGID, "self.a": COEFFS, "self.b": COEFFS},

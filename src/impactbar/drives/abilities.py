@@ -113,6 +113,13 @@ class DriveAbilities:
         ``breaks[0]``. It returns an object with ``state`` (at ``breaks[-1]``), ``w``, ``impulses``
         (``int p dt`` over each interval), ``pieces`` and ``events`` (the oil circuit's
         ``EndFlight``). A drive with state without it runs under an instantaneous law only.
+    end_tangent : callable or None
+        ``end_tangent(pieces, events, mode, breaks, splines, impedance, t0)``: the variational
+        equations of the drive's state along the blow's flight (``pieces`` and ``events`` of an
+        ``end_flight``, ``splines`` its wave ``a`` as a cubic spline ``(x, c, t0)`` on each interval,
+        ``t0`` the impact's time), for the coupled blow's tangent (the oil circuit's
+        :class:`~impactbar.drives.circuit.endtangent.EndTangent`); ``None``: the coupled blow's
+        Jacobian by differences.
     border_tests : callable or None
         ``border_tests(pieces)``: ``{surface: value}`` over one period of an orbit whose flights are
         ``pieces``, each value changing sign where the drive's state touches that switching surface
@@ -135,6 +142,7 @@ class DriveAbilities:
     flight: OwnFlight | None = None
     quadratures: Quadratures | None = None
     end_flight: Callable[..., Any] | None = None
+    end_tangent: Callable[..., Any] | None = None
     border_tests: Callable[..., dict] | None = None
     orbit_problem: Callable[..., Any] | None = None
 

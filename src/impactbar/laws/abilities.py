@@ -191,6 +191,28 @@ class CoupledBlow:
         """
         raise LawNotSupported(not_provided(self, "driven_contact"))
 
+    def driven_tangent(self, model, drive, res, after, state):
+        """The Jacobian of a coupled blow's map ``(q, q', z)`` at the arrival ``->`` after the blow and
+        the drive's map, from a tangent of the blow (theory §11, "The coupled blow"), or ``None``
+        where the law has none for this blow (the default): the caller differences the blow.
+
+        Parameters
+        ----------
+        model : BarModel
+        drive : Drive
+        res : DrivenContact
+            The blow (:meth:`driven_contact`'s).
+        after : DriveState
+            The drive's state after its map at the blow's end.
+        state : DriveState
+            The drive's state at the arrival.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2 N + 2 + k, 2 N + 2 + k), or None
+        """
+        return None
+
 
 class NewtonStart:
     """The ability of a law whose orbits Newton's method reaches better from its own starts (the

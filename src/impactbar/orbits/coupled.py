@@ -8,7 +8,7 @@ import numpy as np
 
 from ..drives.base import DriveState
 
-__all__ = ["coupled_blow", "blow_state", "blow_jacobian", "FD_STEP_BLOW", "FD_STEP_EXACT_BLOW"]
+__all__ = ["coupled_blow", "blow_piece", "blow_state", "blow_jacobian", "FD_STEP_BLOW", "FD_STEP_EXACT_BLOW"]
 
 #: central-difference step of the coupled blow's Jacobian, relative to the modal and the drive's
 #: components' largest sizes: the blow is integrated at rtol 1e-10 (noise / step ~1e-5) and its
@@ -37,15 +37,20 @@ def coupled_blow(model, drive, t, q, v, state, settings=None):
     blow : BlowPiece
         The blow as a piece of the period (:class:`~impactbar.simulation.blows.BlowPiece`).
     """
+    out, res, after = blow_state(model, drive, t, q, v, state, settings)
+    return out, res.t_release, after, blow_piece(model, t, q, v, res)
+
+
+def blow_piece(model, t, q, v, res):
+    """The blow ``res`` (:func:`blow_state`'s) of an arrival at ``t`` in ``(q, q')`` as a piece of
+    the period (:class:`~impactbar.simulation.blows.BlowPiece`)."""
     from ..simulation.blows import BlowPiece
 
-    out, res, after = blow_state(model, drive, t, q, v, state, settings)
     c = model.end_weights
     qa = np.array(q, dtype=float)
     qa[0] -= float(c @ qa)
-    blow = BlowPiece(t, res.t_release, res.record, (qa, np.array(v, dtype=float)), res.pieces, c,
+    return BlowPiece(t, res.t_release, res.record, (qa, np.array(v, dtype=float)), res.pieces, c,
                      (res.q_after.copy(), res.v_after.copy()))
-    return out, res.t_release, after, blow
 
 
 def blow_state(model, drive, t, q, v, state, settings=None):
@@ -82,9 +87,11 @@ def blow_state(model, drive, t, q, v, state, settings=None):
     return np.concatenate((res.q_after, res.v_after, after.z)), res, after
 
 
-def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) -> np.ndarray:
-    """The Jacobian of the coupled blow's map ``(q, q', z)`` at arrival ``->`` after it, by central
-    differences (steps ``FD_STEP_BLOW``, or ``FD_STEP_EXACT_BLOW`` where the law's blows are exact,
+def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None, blow=None) -> np.ndarray:
+    """The Jacobian of the coupled blow's map ``(q, q', z)`` at arrival ``->`` after it: where the
+    law's blows are exact, from the law's tangent of the blow
+    (:meth:`~impactbar.laws.abilities.CoupledBlow.driven_tangent`) where it covers the blow; else by
+    central differences (steps ``FD_STEP_BLOW``, or ``FD_STEP_EXACT_BLOW`` where the law's blows are exact,
     times the largest modal and drive components, each group by its own scale; the map puts ``q_0``
     on the stop first, so its column is 0): the blow is
     autonomous (the drive's force follows its state), so it has no time derivative. ``4 N + 12 +
@@ -97,7 +104,10 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) 
     forward : numpy.ndarray, shape (2 N + 2 + k,), optional
         The blow's map at the point itself (:func:`blow_state`'s ``y`` with the same arguments):
         forward differences from it, their error ``O(FD_STEP_BLOW)`` where the central differences'
-        is ``O(FD_STEP_BLOW^2)``, for a Jacobian that only steers Newton's method.
+        is ``O(FD_STEP_BLOW^2)``, for a Jacobian that only steers Newton's method (no tangent).
+    blow : tuple, optional
+        ``(res, after)`` of :func:`blow_state` with the same arguments (the blow at the point, for the
+        tangent; solved here where not given).
 
     Returns
     -------
@@ -113,13 +123,22 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) 
     scale[2 * M:] = max(float(np.max(np.abs(y[2 * M:]))), 1e-300)
     G = np.zeros((n, n))
 
-    def blow(yy):
+    def solve(yy):
         st = DriveState(state.mode, yy[2 * M:].copy())
         y_after, _, _ = blow_state(model, drive, t, yy[:M], yy[M:2 * M], st, settings)
         return y_after
 
     blow_method = getattr(model.law, "blow_method", None)
     exact = forward is None and blow_method is not None and blow_method(model) == "exact"
+    tangent = getattr(model.law, "driven_tangent", None)
+    if exact and tangent is not None:
+        if blow is None:
+            _, res, after = blow_state(model, drive, t, q, v, state, settings)
+        else:
+            res, after = blow
+        exact_G = tangent(model, drive, res, after, state)
+        if exact_G is not None:
+            return exact_G
     step = FD_STEP_EXACT_BLOW if exact else FD_STEP_BLOW
     for j in range(n):
         if j == 0 and float(model.end_weights[0]) == 1.0:  # q_0 along the section: no effect
@@ -128,9 +147,9 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) 
         yp = y.copy()
         yp[j] += h
         if forward is not None:
-            G[:, j] = (blow(yp) - forward) / h
+            G[:, j] = (solve(yp) - forward) / h
             continue
         ym = y.copy()
         ym[j] -= h
-        G[:, j] = (blow(yp) - blow(ym)) / (2.0 * h)
+        G[:, j] = (solve(yp) - solve(ym)) / (2.0 * h)
     return G

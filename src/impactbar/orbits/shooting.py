@@ -258,20 +258,18 @@ class ShootingProblem(OrbitProblem):
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if self.coupled:  # the blow and the drive's state together, the drive's map at its end
-            from .coupled import blow_jacobian, blow_state, coupled_blow
+            from .coupled import blow_jacobian, blow_piece, blow_state
 
             blow_settings = settings or self.settings
-            if keep:
-                out, t_after, after, blow = coupled_blow(model, drive, t, q, v, state, blow_settings)
-                pieces.append(blow)
-            else:  # (no piece to keep: not made)
-                out, res, after = blow_state(model, drive, t, q, v, state, blow_settings)
-                t_after = res.t_release
+            out, res, after = blow_state(model, drive, t, q, v, state, blow_settings)
+            t_after = res.t_release
+            if keep:  # (no piece to keep: not made)
+                pieces.append(blow_piece(model, t, q, v, res))
             if variational == "state":
                 return out, t_after, after.mode, arrival, pieces, events, None
             if variational:
                 G = blow_jacobian(model, drive, t, q, v, state, blow_settings,
-                                  forward=out if variational == "steer" else None)
+                                  forward=out if variational == "steer" else None, blow=(res, after))
                 return out, t_after, after.mode, arrival, pieces, events, G @ D
             return out, t_after, after.mode, arrival, pieces, events
         if law.traits.restitution_in_kernel:

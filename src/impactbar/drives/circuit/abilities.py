@@ -42,10 +42,11 @@ def circuit_abilities(drive) -> DriveAbilities:
     """The circuit's abilities: its own flights (:meth:`~.HydraulicCircuitDrive.flight`, with the
     variational equations, and :meth:`~.HydraulicCircuitDrive.variational_state_settings`), the
     energy account's quadratures (:meth:`~.HydraulicCircuitDrive.quadratures`, the work on the
-    piston among them), the coupled blows (:meth:`~.HydraulicCircuitDrive.end_flight`) and the
+    piston among them), the coupled blows (:meth:`~.HydraulicCircuitDrive.end_flight`, their tangents
+    :meth:`~.HydraulicCircuitDrive.end_tangent`) and the
     border tests (:meth:`~.HydraulicCircuitDrive.border_tests`)."""
     return DriveAbilities(
         flight=OwnFlight(drive.flight, variational=drive.variational,
                          state_settings=drive.variational_state_settings, carried=drive.carries),
         quadratures=Quadratures(drive.n_quadratures, drive.quadratures, drive.piston_work_quadrature),
-        end_flight=drive.end_flight, border_tests=drive.border_tests)
+        end_flight=drive.end_flight, end_tangent=drive.end_tangent, border_tests=drive.border_tests)

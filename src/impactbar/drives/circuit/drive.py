@@ -582,6 +582,18 @@ class HydraulicCircuitDrive(Drive):
         return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings,
                                   _rate_model(1))
 
+    def end_tangent(self, pieces, events, mode, breaks, splines, impedance, t0):
+        """The circuit's variational equations along a blow's flight (theory §11, "The coupled blow";
+        ``impactbar.drives.circuit.endtangent.EndTangent``, its parameters).
+
+        Returns
+        -------
+        EndTangent
+        """
+        from .endtangent import EndTangent
+
+        return EndTangent(self, pieces, events, mode, breaks, splines, impedance, t0, _rate_model(1))
+
     def border_tests(self, pieces) -> dict:
         """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the
         least supply pressure less the pre-charge (through 0 where the accumulator starts emptying

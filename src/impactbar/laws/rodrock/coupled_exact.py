@@ -70,12 +70,14 @@ projects (theory §11 says what these choices assume).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ..base import DrivenContact, LawNotSupported
 
-__all__ = ["driven_exact_contact", "FORCE_TOL", "MARCH_TOL", "HORIZONS", "MAX_ITERATIONS", "SAMPLES"]
+__all__ = ["driven_exact_contact", "Coupling", "FORCE_TOL", "MARCH_TOL", "HORIZONS", "MAX_ITERATIONS",
+           "SAMPLES"]
 
 #: The iteration ends when the force changes by less than this fraction of its size.
 FORCE_TOL = 1e-9
@@ -96,6 +98,26 @@ SAMPLES = 400
 #: How far inside its interval (in ``T_0``) the spline's end values are taken: beyond the model time's
 #: rounding of a break (``1e-13`` of ``T_0`` on the example), within what moves a value by rounding.
 INSIDE = 1e-10
+
+
+class Coupling(NamedTuple):
+    """What the drive met over a coupled exact blow's last flight (its tangent's data,
+    :mod:`~impactbar.laws.rodrock.coupled_tangent`).
+
+    Attributes
+    ----------
+    breaks : numpy.ndarray
+        The flight's breaks (model times).
+    splines : list of tuple
+        The wave ``a`` on each interval, its callable's ``spline`` ``(x, c, t0)``
+        (:meth:`_Incoming.callables`; the arrays kept, not the callables' lists).
+    impedance : float
+        ``Z_0`` of the piston's driven end (model units).
+    """
+
+    breaks: np.ndarray
+    splines: list
+    impedance: float
 
 
 def _piece_value(piece, tau):
@@ -385,6 +407,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
     rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
+    rec.coupling = Coupling(breaks, [a.spline for a in incoming], Z0)  # (the blow's tangent: coupled_tangent)
     work = float(sum(p.piston_work() for p in fl.pieces))
     gaps = _rigid_gaps(ex, force, q, v, t0, breaks.size - 1)
     return DrivenContact(q_after.copy(), v_after.copy(), t0 + ex.duration, rec, fl.state, fl.pieces,

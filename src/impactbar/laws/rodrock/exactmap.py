@@ -560,6 +560,9 @@ class ExactRockContact(RockContact):
         self.duration = ex.duration
         self.q_after, self.v_after = q_after, v_after
         self._partials = {}
+        #: under a drive: what the drive met over the blow (its tangent's data, a
+        #: :class:`~impactbar.laws.rodrock.coupled_exact.Coupling`)
+        self.coupling = None
 
     def _at(self, tau: float):
         """The exact blow solved again up to ``tau`` (cached)."""

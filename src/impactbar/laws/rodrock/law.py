@@ -322,6 +322,21 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
 
         return driven_rock_contact(model, drive, state, float(t), q_minus, v_minus, settings)
 
+    def driven_tangent(self, model, drive, res, after, state):
+        """With ``method="exact"`` the coupled exact blow's tangent
+        (:func:`~impactbar.laws.rodrock.coupled_tangent.coupled_blow_tangent`, ``None`` where it
+        does not cover the blow); the lattice's blows: ``None`` (differenced by the caller).
+
+        Returns
+        -------
+        numpy.ndarray or None
+        """
+        if self.method != "exact":
+            return None
+        from .coupled_tangent import coupled_blow_tangent
+
+        return coupled_blow_tangent(model, drive, res, after, state)
+
     def parameter_table(self, model=None) -> tuple[Parameter, ...]:
         """The law's parameters, in its units (:attr:`parameters`), for
         :func:`impactbar.parameters.parameters`: a segment's length is not continuable where the blows
