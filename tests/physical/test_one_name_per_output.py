@@ -124,10 +124,21 @@ def test_each_view_names_an_output_by_its_name_and_long_name():
 
 
 def test_the_constraints_are_named_by_their_outputs():
+    """Each constraint is its output's name or key (``min_<name>``: at least it): a constraint
+    named otherwise is one quantity under a second name."""
     for name in (*DEFAULT_CONSTRAINTS, *IDEAL_CONSTRAINTS):
         assert name not in RENAMED
-        o = constraint_output(name).output
-        assert name in (o.name, o.key, f"min_{o.name}") or _output_named(name) is None
+        c = constraint_output(name)
+        assert name in (c.output.name, c.output.key, f"min_{c.output.name}"), \
+            f"constraint {name!r} limits the output {c.output.name!r}: name it by it"
+        if name == f"min_{c.output.name}":
+            assert c.sense == -1, f"{name}: min_<name> is at least the limit"
+
+
+def test_a_constraint_given_by_its_old_name_limits_the_same_output_on_the_same_side():
+    with pytest.warns(DeprecationWarning, match="constraint 'min_pressure' is now called 'minimum_pressure'"):
+        old = constraint_output("min_pressure")
+    assert old == constraint_output("minimum_pressure") and old.sense == -1
 
 
 @pytest.mark.parametrize("old", sorted(RENAMED))
