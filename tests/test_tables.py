@@ -151,4 +151,4 @@ def test_si_orbit_list_is_a_table():
     v = hammer.mean_force_N / (hammer.frequency_Hz * hammer.mass_kg * (1 + hammer.R))
     np.testing.assert_allclose(df["impact_velocity_m_s"], v, rtol=1e-4)
     assert df.attrs["columns"]["power_W"]["units"] == "W"
-    assert found.to_xarray()["peak_stress_Pa"].attrs["units"] == "Pa"
+    assert found.to_xarray()["peak_piston_stress_Pa"].attrs["units"] == "Pa"

@@ -38,7 +38,7 @@ found = physical.orbits(hammer)
 for o in found:
     print(f"phase {o.phase_rad:.3f} rad: v = {o.impact_velocity_m_s:.2f} m/s, "
           f"E = {o.blow_energy_J:.1f} J, P = {o.power_W:.0f} W, "
-          f"sigma = {o.peak_stress_Pa / 1e6:.0f} MPa, admissible {o.admissible}, stable {o.stable}")
+          f"sigma = {o.peak_piston_stress_Pa / 1e6:.0f} MPa, admissible {o.admissible}, stable {o.stable}")
 
 # %%
 # How the blow energy depends on the mean force

@@ -214,3 +214,44 @@ def test_the_valve_drifters_old_power_reads_the_impact_power():
     assert "impact_power_kW" in o.summary() and "percussive_power_kW" not in o.summary()
     with pytest.warns(DeprecationWarning, match="percussive_power_kW is now called impact_power_kW"):
         assert o.percussive_power_kW == o.impact_power_kW
+
+
+def _result_names() -> dict:
+    """The values the SI result types declare, by type: the one-impact orbit's
+    (:class:`~impactbar.physical.PhysicalOrbit`) and the piston design's
+    (:class:`~impactbar.physical.OptimalPiston`)."""
+    import dataclasses
+
+    from impactbar.physical import OptimalPiston, PhysicalOrbit
+
+    return {"PhysicalOrbit": {f.name for f in PHYSICAL_ORBIT_FIELDS} | {f.name for f in
+                                                                       dataclasses.fields(PhysicalOrbit)},
+            "OptimalPiston": {f.name for f in dataclasses.fields(OptimalPiston)}}
+
+
+def test_a_name_two_results_share_is_one_outputs_key():
+    """A name two result types both use is one quantity: the registry's key of it (the stress in the
+    piston at impact and the rod's incident peak were both ``peak_stress_Pa``)."""
+    (a, b) = _result_names().values()
+    shared = a & b
+    assert shared  # (the walk sees both types' fields)
+    keys = {o.key for o in OUTPUTS.values()}
+    assert not shared - keys, f"one name, two quantities: {sorted(shared - keys)}"
+
+
+@pytest.mark.parametrize(("cls", "old", "new"), [
+    ("OptimalPiston", "peak_stress_Pa", "peak_rod_stress_Pa"),
+    ("OptimalPiston", "uniform_peak_stress_Pa", "uniform_peak_rod_stress_Pa"),
+    ("PhysicalOrbit", "peak_stress_Pa", "peak_piston_stress_Pa"),
+])
+def test_a_results_old_attribute_reads_the_new_one_with_a_deprecation_warning(cls, old, new):
+    import impactbar.physical as ph
+
+    class Stand(getattr(ph, cls)):  # (the attribute alone, without solving a blow or an orbit)
+        def __init__(self):
+            pass
+
+    stand = Stand()
+    object.__setattr__(stand, new, 123.25)
+    with pytest.warns(DeprecationWarning, match=f"{old} is now called {new}"):
+        assert getattr(stand, old) == 123.25

@@ -456,7 +456,7 @@ def test_pneumatic_preset_has_a_stable_orbit():
     o = good[0]
     assert 5.0 <= o.impact_velocity_m_s <= 12.0
     assert 20.0 <= o.blow_energy_J <= 200.0
-    assert 100e6 <= o.peak_stress_Pa <= 400e6
+    assert 100e6 <= o.peak_piston_stress_Pa <= 400e6
 
 
 @needs_orbits

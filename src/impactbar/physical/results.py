@@ -10,6 +10,7 @@ from typing import ClassVar
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.renamed import renamed_attribute
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_real
 from ..laws.abilities import BlowRecords
@@ -64,8 +65,8 @@ PHYSICAL_ORBIT_FIELDS = _ORBIT_SI + Schema(
           label="E/J", fmt=".2f"),
     OUTPUTS["blow_frequency"].column(views={"dict", "table"}),
     Field("power_W", "impact power", "W", views={"dict", "table", "cli"}, label="P/W", fmt=".1f"),
-    _shown(Field("peak_stress_Pa", "peak compressive stress at impact", "Pa", views={"dict", "table", "cli"},
-                 fmt=".1f"), "sigma"),
+    _shown(Field("peak_piston_stress_Pa", "peak compressive stress in the piston at impact", "Pa",
+                 views={"dict", "table", "cli"}, fmt=".1f"), "sigma"),
     OUTPUTS["rod_energy"].column(views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
     _shown(OUTPUTS["peak_rod_stress"].column(views={"dict", "table", "cli"}, fmt=".1f"), "rod"),
     OUTPUTS["efficiency"].column(views={"dict", "table", "cli", "cli_rock"}, label="eff.", fmt=".3f"),
@@ -111,8 +112,9 @@ class PhysicalOrbit:
         Blows per second :math:`\Omega / 2 \pi` (Hz).
     power_W : float
         Impact power, energy per blow times blow frequency (W).
-    peak_stress_Pa : float
-        Peak compressive stress at impact (Pa), see :meth:`Hammer.peak_stress_Pa`.
+    peak_piston_stress_Pa : float
+        Peak compressive stress in the piston at impact (Pa), see :meth:`Hammer.peak_stress_Pa`
+        (``peak_stress_Pa`` the name it had: a ``DeprecationWarning``).
     rod_energy_J : float
         Energy carried into the rod by the transmitted stress wave per blow (J), :math:`\int F^2 / Z_s \, dt`.
         Under the wave law (theory §4b) from the contact solved by characteristics, the drive
@@ -143,7 +145,7 @@ class PhysicalOrbit:
     blow_energy_J: float
     blow_frequency_Hz: float
     power_W: float
-    peak_stress_Pa: float
+    peak_piston_stress_Pa: float
     rod_energy_J: float
     peak_rod_stress_Pa: float
     efficiency: float
@@ -155,6 +157,8 @@ class PhysicalOrbit:
 
     #: the declared fields (:data:`PHYSICAL_ORBIT_FIELDS`)
     fields: ClassVar[Schema] = PHYSICAL_ORBIT_FIELDS
+
+    peak_stress_Pa = renamed_attribute("peak_stress_Pa", "peak_piston_stress_Pa")
 
     def __getattr__(self, name: str):
         """The orbit's fields in SI: its own value, or converted with the hammer's scales."""
@@ -172,7 +176,7 @@ class PhysicalOrbit:
         fb = hammer.blow_frequency_Hz
         rod = _rod_figures(orbit, hammer, v)
         return cls(orbit=orbit, scales=hammer.scales, blow_energy_J=energy, blow_frequency_Hz=fb,
-                   power_W=energy * fb, peak_stress_Pa=float(hammer.peak_stress_Pa(v)), **rod)
+                   power_W=energy * fb, peak_piston_stress_Pa=float(hammer.peak_stress_Pa(v)), **rod)
 
     def to_dict(self) -> dict:
         """JSON-ready figures (without the dimensionless orbit object): the fields of
