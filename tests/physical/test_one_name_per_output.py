@@ -255,3 +255,32 @@ def test_a_results_old_attribute_reads_the_new_one_with_a_deprecation_warning(cl
     object.__setattr__(stand, new, 123.25)
     with pytest.warns(DeprecationWarning, match=f"{old} is now called {new}"):
         assert getattr(stand, old) == 123.25
+
+
+def test_the_hammers_orbit_names_what_it_shares_with_a_drifters_as_the_registry_does():
+    """Each output both drifters have and read as an operating point's attribute is read from the
+    hammer's one-impact orbit (:class:`~impactbar.physical.PhysicalOrbit`) by the same key (it said
+    ``blow_energy_J`` for ``impact_energy_J`` and ``power_W`` for ``impact_power_kW``), and its value
+    is the closed form's: the energy :math:`m v^2/2`, the power that times the blow frequency. The
+    old names read the same numbers, bit for bit, with a ``DeprecationWarning``."""
+    from impactbar import physical as ph
+    from impactbar.physical.outputs import Reading
+
+    hammer = ph.preset("pneumatic-drill")
+    o = ph.orbits(hammer)[0]
+    v, fb = o.impact_velocity_m_s, o.blow_frequency_Hz
+    energy = 0.5 * hammer.mass_kg * v * v
+    closed = {"impact_energy": energy, "impact_power": energy * fb / 1e3, "blow_frequency": fb,
+              "impact_velocity": v}
+    shared = [out for out, where, _ in figures_read() if where == "an operating point's attribute"
+              and out.machines == {"drifter", "circuit"} and out.name != "period"]  # (no period field)
+    assert {"impact_energy", "impact_power"} <= {out.name for out in shared}
+    reading = Reading(o)
+    for out in shared:
+        value = out.of(reading)  # (an AttributeError: the hammer's orbit names it otherwise)
+        if out.name in closed:
+            assert value == pytest.approx(closed[out.name], rel=1e-12), out.name
+    with pytest.warns(DeprecationWarning, match="blow_energy_J is now called impact_energy_J"):
+        assert o.blow_energy_J == o.impact_energy_J
+    with pytest.warns(DeprecationWarning, match="power_W is now called impact_power_kW"):
+        assert o.power_W == o.impact_energy_J * o.blow_frequency_Hz
