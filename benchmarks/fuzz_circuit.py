@@ -346,7 +346,7 @@ def stepped_calls(rng, n, slow, case):
                 if abs(best.bar.length_m - a["length"]) > 1e-9 * a["length"]:
                     out.append("BAD piston's length not kept")
                 if best.feasible and best.work_on_rock_J < best.uniform_work_on_rock_J * (1 - 1e-6) \
-                        and best.uniform_peak_stress_Pa <= best.max_stress_Pa:
+                        and best.uniform_peak_rod_stress_Pa <= best.max_stress_Pa:
                     out.append("BAD optimum below the uniform piston")
                 return out or ["ok"]
 

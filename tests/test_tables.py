@@ -145,10 +145,10 @@ def test_si_orbit_list_is_a_table():
     df = found.to_dataframe()
     assert len(df) == len(found) == 2
     for i, o in enumerate(found):
-        assert df.loc[i, "blow_energy_J"] == o.blow_energy_J and bool(df.loc[i, "stable"]) == o.stable
+        assert df.loc[i, "impact_energy_J"] == o.impact_energy_J and bool(df.loc[i, "stable"]) == o.stable
     # the rigid mode's identity v = F_mean / (f m (1 + R)) (theory §1, SI scaling); the flexible
     # modes of this stiff piston add about 2e-5 at the struck end
     v = hammer.mean_force_N / (hammer.frequency_Hz * hammer.mass_kg * (1 + hammer.R))
     np.testing.assert_allclose(df["impact_velocity_m_s"], v, rtol=1e-4)
-    assert df.attrs["columns"]["power_W"]["units"] == "W"
-    assert found.to_xarray()["peak_stress_Pa"].attrs["units"] == "Pa"
+    assert df.attrs["columns"]["impact_power_kW"]["units"] == "kW"
+    assert found.to_xarray()["peak_piston_stress_Pa"].attrs["units"] == "Pa"

@@ -37,8 +37,8 @@ print(f"contact 2L/c = {hammer.contact_duration_s * 1e6:.1f} us "
 found = physical.orbits(hammer)
 for o in found:
     print(f"phase {o.phase_rad:.3f} rad: v = {o.impact_velocity_m_s:.2f} m/s, "
-          f"E = {o.blow_energy_J:.1f} J, P = {o.power_W:.0f} W, "
-          f"sigma = {o.peak_stress_Pa / 1e6:.0f} MPa, admissible {o.admissible}, stable {o.stable}")
+          f"E = {o.impact_energy_J:.1f} J, P = {o.impact_power_kW:.3f} kW, "
+          f"sigma = {o.peak_piston_stress_Pa / 1e6:.0f} MPa, admissible {o.admissible}, stable {o.stable}")
 
 # %%
 # How the blow energy depends on the mean force
@@ -62,7 +62,7 @@ for F in means:
     cfg = {**config, "force": {**config["force"], "mean": f"{F} N"}}
     h = physical.Hammer.from_config(cfg)
     for o in physical.orbits(h):
-        rows.append((F, o.blow_energy_J, o.stable))
+        rows.append((F, o.impact_energy_J, o.stable))
 F, E, st = (np.array(c) for c in zip(*rows, strict=True))
 fig, ax = plt.subplots(figsize=(6.5, 3.8))
 ax.plot(F[st], E[st], "o", color="k", ms=4, label="stable")
@@ -93,7 +93,7 @@ fit = hammer_m.fourier_fit
 print(f"{fit.n_harmonics} harmonics, max error {fit.max_error_N:.1f} N "
       f"({fit.relative_error:.2%} of the swing)")
 for o in physical.orbits(hammer_m):
-    print(f"v = {o.impact_velocity_m_s:.2f} m/s, E = {o.blow_energy_J:.1f} J, stable {o.stable}")
+    print(f"v = {o.impact_velocity_m_s:.2f} m/s, E = {o.impact_energy_J:.1f} J, stable {o.stable}")
 
 # %%
 # Simulated from rest
@@ -103,7 +103,7 @@ for o in physical.orbits(hammer_m):
 res = physical.simulate(hammer, periods=30)
 fig, ax = plt.subplots(figsize=(7, 3.2))
 ax.plot(res.impact_times_s * 1e3, res.blow_energies_J, "o-", ms=3, lw=0.6)
-stable_E = [o.blow_energy_J for o in found if o.stable]
+stable_E = [o.impact_energy_J for o in found if o.stable]
 for e in stable_E:
     ax.axhline(e, color="tab:red", ls="--", label="stable periodic motion")
 ax.set_xlabel("time / ms")

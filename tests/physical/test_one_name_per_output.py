@@ -124,10 +124,21 @@ def test_each_view_names_an_output_by_its_name_and_long_name():
 
 
 def test_the_constraints_are_named_by_their_outputs():
+    """Each constraint is its output's name or key (``min_<name>``: at least it): a constraint
+    named otherwise is one quantity under a second name."""
     for name in (*DEFAULT_CONSTRAINTS, *IDEAL_CONSTRAINTS):
         assert name not in RENAMED
-        o = constraint_output(name).output
-        assert name in (o.name, o.key, f"min_{o.name}") or _output_named(name) is None
+        c = constraint_output(name)
+        assert name in (c.output.name, c.output.key, f"min_{c.output.name}"), \
+            f"constraint {name!r} limits the output {c.output.name!r}: name it by it"
+        if name == f"min_{c.output.name}":
+            assert c.sense == -1, f"{name}: min_<name> is at least the limit"
+
+
+def test_a_constraint_given_by_its_old_name_limits_the_same_output_on_the_same_side():
+    with pytest.warns(DeprecationWarning, match="constraint 'min_pressure' is now called 'minimum_pressure'"):
+        old = constraint_output("min_pressure")
+    assert old == constraint_output("minimum_pressure") and old.sense == -1
 
 
 @pytest.mark.parametrize("old", sorted(RENAMED))
@@ -203,3 +214,73 @@ def test_the_valve_drifters_old_power_reads_the_impact_power():
     assert "impact_power_kW" in o.summary() and "percussive_power_kW" not in o.summary()
     with pytest.warns(DeprecationWarning, match="percussive_power_kW is now called impact_power_kW"):
         assert o.percussive_power_kW == o.impact_power_kW
+
+
+def _result_names() -> dict:
+    """The values the SI result types declare, by type: the one-impact orbit's
+    (:class:`~impactbar.physical.PhysicalOrbit`) and the piston design's
+    (:class:`~impactbar.physical.OptimalPiston`)."""
+    import dataclasses
+
+    from impactbar.physical import OptimalPiston, PhysicalOrbit
+
+    return {"PhysicalOrbit": {f.name for f in PHYSICAL_ORBIT_FIELDS} | {f.name for f in
+                                                                       dataclasses.fields(PhysicalOrbit)},
+            "OptimalPiston": {f.name for f in dataclasses.fields(OptimalPiston)}}
+
+
+def test_a_name_two_results_share_is_one_outputs_key():
+    """A name two result types both use is one quantity: the registry's key of it (the stress in the
+    piston at impact and the rod's incident peak were both ``peak_stress_Pa``)."""
+    (a, b) = _result_names().values()
+    shared = a & b
+    assert shared  # (the walk sees both types' fields)
+    keys = {o.key for o in OUTPUTS.values()}
+    assert not shared - keys, f"one name, two quantities: {sorted(shared - keys)}"
+
+
+@pytest.mark.parametrize(("cls", "old", "new"), [
+    ("OptimalPiston", "peak_stress_Pa", "peak_rod_stress_Pa"),
+    ("OptimalPiston", "uniform_peak_stress_Pa", "uniform_peak_rod_stress_Pa"),
+    ("PhysicalOrbit", "peak_stress_Pa", "peak_piston_stress_Pa"),
+])
+def test_a_results_old_attribute_reads_the_new_one_with_a_deprecation_warning(cls, old, new):
+    import impactbar.physical as ph
+
+    class Stand(getattr(ph, cls)):  # (the attribute alone, without solving a blow or an orbit)
+        def __init__(self):
+            pass
+
+    stand = Stand()
+    object.__setattr__(stand, new, 123.25)
+    with pytest.warns(DeprecationWarning, match=f"{old} is now called {new}"):
+        assert getattr(stand, old) == 123.25
+
+
+def test_the_hammers_orbit_names_what_it_shares_with_a_drifters_as_the_registry_does():
+    """Each output both drifters have and read as an operating point's attribute is read from the
+    hammer's one-impact orbit (:class:`~impactbar.physical.PhysicalOrbit`) by the same key (it said
+    ``blow_energy_J`` for ``impact_energy_J`` and ``power_W`` for ``impact_power_kW``), and its value
+    is the closed form's: the energy :math:`m v^2/2`, the power that times the blow frequency. The
+    old names read the same numbers, bit for bit, with a ``DeprecationWarning``."""
+    from impactbar import physical as ph
+    from impactbar.physical.outputs import Reading
+
+    hammer = ph.preset("pneumatic-drill")
+    o = ph.orbits(hammer)[0]
+    v, fb = o.impact_velocity_m_s, o.blow_frequency_Hz
+    energy = 0.5 * hammer.mass_kg * v * v
+    closed = {"impact_energy": energy, "impact_power": energy * fb / 1e3, "blow_frequency": fb,
+              "impact_velocity": v}
+    shared = [out for out, where, _ in figures_read() if where == "an operating point's attribute"
+              and out.machines == {"drifter", "circuit"} and out.name != "period"]  # (no period field)
+    assert {"impact_energy", "impact_power"} <= {out.name for out in shared}
+    reading = Reading(o)
+    for out in shared:
+        value = out.of(reading)  # (an AttributeError: the hammer's orbit names it otherwise)
+        if out.name in closed:
+            assert value == pytest.approx(closed[out.name], rel=1e-12), out.name
+    with pytest.warns(DeprecationWarning, match="blow_energy_J is now called impact_energy_J"):
+        assert o.blow_energy_J == o.impact_energy_J
+    with pytest.warns(DeprecationWarning, match="power_W is now called impact_power_kW"):
+        assert o.power_W == o.impact_energy_J * o.blow_frequency_Hz

@@ -100,7 +100,8 @@ def test_every_reported_figure_has_its_sign_and_size():
     res = _relaxed_run(23.0e6)
     assert res.optimum["feasible"] and res.baseline["feasible"]  # both met, by their fresh orbits
     for rec in (res.baseline, res.optimum):
-        sides = {"max_multiplier": 1, "min_pressure": -1, "mean_supply_pressure": 1, "min_chamber_volume": -1}
+        sides = {"max_multiplier": 1, "minimum_pressure": -1, "mean_supply_pressure": 1,
+                 "min_chamber_volume": -1}
         for name, c in rec["constraints"].items():
             assert c["margin"] == pytest.approx(sides[name] * (c["limit"] - c["value"]), rel=1e-12)
             assert (c["scaled"] >= 0) == (c["margin"] >= 0)

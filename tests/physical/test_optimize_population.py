@@ -146,4 +146,4 @@ def test_a_dropped_constraint_stays_dropped(method):
                            objective="impact_power", constraints={"max_multiplier": None}, method=method,
                            popsize=2, max_evaluations=budget, progress=False)
     assert all("max_multiplier" not in r["constraints"] for r in [*res.history, res.optimum, res.baseline])
-    assert "min_pressure" in res.optimum["constraints"]
+    assert "minimum_pressure" in res.optimum["constraints"]

@@ -66,8 +66,8 @@ def test_the_population_on_a_valve_drifter_reports_a_fresh_operating_point():
     ({"objective": "drilling_rate_per_kW"},
      "objective 'drilling_rate_per_kW' is not a valve drifter's .*; one of impact_power, "
      "work_on_rock_per_blow, drilling_rate$"),
-    ({"objective": "impact_power", "constraints": {"min_pressure": "0 MPa"}},
-     "unknown constraint 'min_pressure' of a valve drifter .*; one of peak_rod_stress, max_multiplier, "
+    ({"objective": "impact_power", "constraints": {"minimum_pressure": "0 MPa"}},
+     "unknown constraint 'minimum_pressure' of a valve drifter .*; one of peak_rod_stress, max_multiplier, "
      "min_drilling_rate, piston_mass,"),
     ({"objective": "impact_power", "method": "slsqp"}, "method 'slsqp': SLSQP's gradients"),
     ({"objective": "impact_power", "method": "multistart"}, "method 'multistart' with polish"),

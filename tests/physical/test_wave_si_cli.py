@@ -39,7 +39,7 @@ def test_paper_law_rod_figures_rigid_piston():
     h = ph.Hammer.from_config(BASE)
     R = h.R
     for o in ph.orbits(h):
-        assert o.rod_energy_J == pytest.approx((1 - R**2) * o.blow_energy_J, rel=1e-12)
+        assert o.rod_energy_J == pytest.approx((1 - R**2) * o.impact_energy_J, rel=1e-12)
         assert o.efficiency == pytest.approx(1 - R**2, rel=1e-12)
         assert o.peak_rod_stress_Pa == pytest.approx(
             7850 * h.bar.wave_speed_m_s * o.impact_velocity_m_s * (1 - R) / 2, rel=1e-12)

@@ -38,3 +38,41 @@ def renamed(module, name: str):
     warnings.warn(f"{module.__name__}.{name} is renamed {new}; the old name will be removed",
                   DeprecationWarning, stacklevel=3)
     return getattr(module, new)
+
+
+def renamed_attribute(old: str, new: str, value=None) -> property:
+    """A result's attribute under the name it had before: a read-only property that gives the
+    attribute ``new`` (or ``value(obj)``) with a :class:`DeprecationWarning` naming it.
+
+    Parameters
+    ----------
+    old : str
+        The name it had (the property's).
+    new : str
+        The name it has now.
+    value : callable, optional
+        ``value(obj)``: the old attribute's value where it is not ``new``'s as it is (another unit).
+
+    Returns
+    -------
+    property
+
+    Examples
+    --------
+    >>> import warnings
+    >>> class Result:
+    ...     impact_energy_J = 2.5
+    ...     blow_energy_J = renamed_attribute("blow_energy_J", "impact_energy_J")
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     Result().blow_energy_J, str(caught[0].message)
+    (2.5, 'blow_energy_J is now called impact_energy_J')
+    """
+
+    def get(obj):
+        warnings.warn(f"{old} is now called {new}", DeprecationWarning, stacklevel=2)
+        return getattr(obj, new) if value is None else value(obj)
+
+    get.__name__ = old
+    get.__doc__ = f":attr:`{new}` under the name it had before (a ``DeprecationWarning``)."
+    return property(get)

@@ -85,7 +85,7 @@ def run_physical_orbits(args) -> int:
 
     The JSON echoes the inputs (``mass_kg``, ``mean_force_N``, ``frequency_Hz``,
     ``restitution``, ...) at the top level and lists the orbits under ``orbits``, each with
-    ``impact_velocity_m_s``, ``blow_energy_J``, ``power_W``, ``admissible``, ``stable``,
+    ``impact_velocity_m_s``, ``impact_energy_J``, ``impact_power_kW``, ``admissible``, ``stable``,
     ``max_abs_multiplier`` and more. Warnings (long impacts) go to stderr and into ``warnings``.
     """
     hammer = hammer_from_args(args)

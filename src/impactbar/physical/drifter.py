@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._shared.renamed import renamed_attribute
 from .._shared.validate import check_int, check_real
 from . import tree
 from ._circuit_checks import shown
@@ -364,13 +365,7 @@ class DrifterOrbit:
         """The kinetic energy at impact times the blow frequency (kW)."""
         return self.impact_energy_J * self.blow_frequency_Hz / 1e3
 
-    @property
-    def percussive_power_kW(self) -> float:
-        """:attr:`impact_power_kW` under the name it had before (a ``DeprecationWarning``)."""
-        import warnings
-
-        warnings.warn("percussive_power_kW is now called impact_power_kW", DeprecationWarning, stacklevel=2)
-        return self.impact_power_kW
+    percussive_power_kW = renamed_attribute("percussive_power_kW", "impact_power_kW")
 
     @property
     def multipliers(self) -> np.ndarray:

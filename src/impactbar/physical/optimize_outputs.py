@@ -15,11 +15,13 @@ __all__ = ["constraint_output", "piston_and_multipliers", "shank_stress"]
 
 #: Each constraint: the output it limits (:mod:`~impactbar.physical.outputs`, its unit the
 #: constraint's), its sense (+1: the value at most the limit; -1: at least) and the scale of its
-#: normalised margin for the search (``None``: the limit's size). Any other output is a constraint
-#: too: by its name at most the limit, ``min_<name>`` at least (:func:`constraint_output`).
+#: normalised margin for the search (``None``: the limit's size). Each is named by its output: its
+#: name or key, ``min_<name>`` for at least (a least over the period, ``minimum_pressure`` and
+#: ``min_chamber_volume``, at least by its own name). Any other output is a constraint too: by its
+#: name at most the limit, ``min_<name>`` at least (:func:`constraint_output`).
 _CONSTRAINTS = {"peak_rod_stress": ("peak_rod_stress", 1, None),
                 "max_multiplier": ("max_abs_multiplier", 1, 1.0),
-                "min_pressure": ("minimum_pressure", -1, 1e6),
+                "minimum_pressure": ("minimum_pressure", -1, 1e6),
                 "mean_supply_pressure": ("mean_supply_pressure", 1, None),
                 "peak_supply_pressure": ("peak_supply_pressure", 1, None),
                 "min_chamber_volume": ("min_chamber_volume", -1, 1e-4),
@@ -50,7 +52,7 @@ def constraint_output(name: str, kind: str = "circuit") -> _Constrained | None:
     ('drilling_rate', -1, 'm/min')
     >>> constraint_output("min_impact_velocity").output.name, constraint_output("speed")
     ('impact_velocity', None)
-    >>> constraint_output("min_pressure", "drifter") is None  # (no oil)
+    >>> constraint_output("minimum_pressure", "drifter") is None  # (no oil)
     True
     """
     name = current_name(name, "constraint")  # (an old name: a DeprecationWarning)

@@ -77,14 +77,14 @@ OBJECTIVES = objectives()
 #: The constraints and their default limits (SI): ``peak_rod_stress`` (Pa, the largest stress in
 #: the shank adapter before the rock's first reflection is back at it, or over the piston's first
 #: contact where that lasts longer: the peak of the incident wave; ``None``: not constrained),
-#: ``max_multiplier`` (the largest Floquet multiplier's modulus), ``min_pressure`` (Pa absolute: no
-#: cavitation at 0),
+#: ``max_multiplier`` (the largest Floquet multiplier's modulus), ``minimum_pressure`` (Pa absolute,
+#: the least pressure of the oil at least: no cavitation at 0),
 #: ``mean_supply_pressure`` (Pa; ``"relief"``: the relief valve's setting), ``peak_supply_pressure``
 #: (Pa; ``None``: not constrained), ``min_chamber_volume`` (m^3, the smallest volume of either chamber
 #: over the period must lie above it), ``min_drilling_rate`` (m/min; ``None``: not constrained; a
 #: design that drills per kilowatt more by drilling slower is then kept from the optimum),
 #: ``piston_mass`` (kg, the piston's mass at most; ``None``: not constrained).
-DEFAULT_CONSTRAINTS = {"peak_rod_stress": None, "max_multiplier": 0.95, "min_pressure": 0.0,
+DEFAULT_CONSTRAINTS = {"peak_rod_stress": None, "max_multiplier": 0.95, "minimum_pressure": 0.0,
                        "mean_supply_pressure": "relief", "peak_supply_pressure": None,
                        "min_chamber_volume": 0.0, "min_drilling_rate": None, "piston_mass": None}
 

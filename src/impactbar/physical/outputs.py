@@ -391,9 +391,12 @@ _BUILTIN = frozenset(OUTPUTS)
 #: optimiser's constraints said ``peak_incident_stress`` for the orbit's and the rock figures'
 #: ``peak_rod_stress``, and ``rock_efficiency`` (an operating point's) and ``blow_efficiency`` (an
 #: ideal blow's) for the blow's ``efficiency``; the valve drifter's summaries said ``percussive_power``
-#: for ``impact_power`` (the kinetic energy at impact times the blow frequency, both machines').
+#: for ``impact_power`` (the kinetic energy at impact times the blow frequency, both machines'); the
+#: optimiser's constraint ``min_pressure`` limited ``minimum_pressure`` (the least pressure of the oil),
+#: a constraint now named by it.
 RENAMED = {"peak_incident_stress": "peak_rod_stress", "rock_efficiency": "efficiency",
-           "blow_efficiency": "efficiency", "percussive_power": "impact_power"}
+           "blow_efficiency": "efficiency", "percussive_power": "impact_power",
+           "min_pressure": "minimum_pressure"}
 
 
 def current_name(name: str, what: str = "output") -> str:

@@ -43,6 +43,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._shared.renamed import renamed_attribute
 from .._shared.validate import check_int, check_real
 from .rock import RodPiece
 
@@ -108,14 +109,15 @@ class OptimalPiston:
     ----------
     lengths_m, areas_m2 : numpy.ndarray, shape (n,)
         The segments' lengths (m) and cross-sections (m^2), from the driven end to the struck end.
-    work_on_rock_J, efficiency, peak_stress_Pa : float
+    work_on_rock_J, efficiency, peak_rod_stress_Pa : float
         Of its blow: the work on the rock (J), that over the impact energy :math:`m V^2/2` (plus the
         feed's), and the peak of the incident stress wave in the rod's first piece (Pa): the
         largest piston-shank force over the first piece's area before the wave the rock reflects
         first is back at the shank, or over the piston's first contact where that lasts longer (the
         stepped piston's own re-strikes included, what the rock sends back not).
-    uniform_work_on_rock_J, uniform_efficiency, uniform_peak_stress_Pa : float
-        The same of the uniform piston of the same mass and length.
+    uniform_work_on_rock_J, uniform_efficiency, uniform_peak_rod_stress_Pa : float
+        The same of the uniform piston of the same mass and length (``peak_stress_Pa`` and
+        ``uniform_peak_stress_Pa`` the names the peaks had: a ``DeprecationWarning``).
     blow_peak_stress_Pa : float
         The largest piston-shank stress of the whole blow (Pa), the piston's re-contacts on what the
         rock sends back included. Not limited: on a stiff rock's unloading the bit reflects a spike
@@ -146,10 +148,10 @@ class OptimalPiston:
     areas_m2: np.ndarray
     work_on_rock_J: float
     efficiency: float
-    peak_stress_Pa: float
+    peak_rod_stress_Pa: float
     uniform_work_on_rock_J: float
     uniform_efficiency: float
-    uniform_peak_stress_Pa: float
+    uniform_peak_rod_stress_Pa: float
     blow_peak_stress_Pa: float
     feasible: bool
     evaluations: int
@@ -171,7 +173,10 @@ class OptimalPiston:
                         zip(self.lengths_m, self.diameters_m, strict=True))
         return (f"OptimalPiston({seg}; work on rock {self.work_on_rock_J:.5g} J (uniform "
                 f"{self.uniform_work_on_rock_J:.5g} J), efficiency {self.efficiency:.4f}, peak stress "
-                f"{self.peak_stress_Pa / 1e6:.4g} MPa)")
+                f"{self.peak_rod_stress_Pa / 1e6:.4g} MPa)")
+
+    peak_stress_Pa = renamed_attribute("peak_stress_Pa", "peak_rod_stress_Pa")
+    uniform_peak_stress_Pa = renamed_attribute("uniform_peak_stress_Pa", "uniform_peak_rod_stress_Pa")
 
     @property
     def diameters_m(self) -> np.ndarray:
@@ -227,7 +232,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     max_stress : float
         The largest compressive stress (Pa, ``> 0``) allowed in the incident wave: the peak
         piston-shank force over the first rod piece's area before the rock's first reflection is
-        back at the shank (:attr:`OptimalPiston.peak_stress_Pa`; ``math.inf``: no limit).
+        back at the shank (:attr:`OptimalPiston.peak_rod_stress_Pa`; ``math.inf``: no limit).
     impact_velocity : float
         The piston's velocity at impact (m/s), ``> 0``; moving rigidly and unstressed.
     segments : int
@@ -380,9 +385,9 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     peak, _ = shaped.peak_shank_force()
     return OptimalPiston(
         lengths_m=lengths, areas_m2=areas, work_on_rock_J=shaped.work_on_rock * energy_J,
-        efficiency=shaped.efficiency, peak_stress_Pa=stress,
+        efficiency=shaped.efficiency, peak_rod_stress_Pa=stress,
         uniform_work_on_rock_J=uniform.work_on_rock * energy_J, uniform_efficiency=uniform.efficiency,
-        uniform_peak_stress_Pa=u_stress, blow_peak_stress_Pa=peak * force_N / pieces[0].area_m2,
+        uniform_peak_rod_stress_Pa=u_stress, blow_peak_stress_Pa=peak * force_N / pieces[0].area_m2,
         feasible=x_s == 0.0, evaluations=count[0],
         cell_time_s=shaped.cell_time * time_s, times_s=shaped.times[:steps + 1] * time_s,
         incident_force_N=shaped.shank_forces[:steps] * force_N,
@@ -428,7 +433,7 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
         ``work_on_rock_J``, ``efficiency`` (the work over the impact energy, plus the feed's),
         ``impact_energy_J`` (:math:`m V^2/2`), ``peak_rod_stress_Pa`` (the exact peak of the
         incident wave, the piston-shank force over the rod's first area as
-        :attr:`OptimalPiston.peak_stress_Pa` reads it), ``blow_peak_stress_Pa`` (of the whole
+        :attr:`OptimalPiston.peak_rod_stress_Pa` reads it), ``blow_peak_stress_Pa`` (of the whole
         blow, re-contacts included), ``mass_kg``, ``length_m``, ``method``
         (``"exact"`` or ``"lattice"``) and ``blow`` (the :class:`~impactbar.laws.rodrock.Blow`, in
         the units of piston mass, length and wave speed 1).

@@ -10,6 +10,7 @@ from typing import ClassVar
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.renamed import renamed_attribute
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_real
 from ..laws.abilities import BlowRecords
@@ -60,12 +61,11 @@ def _shown(declared: Field, label: str) -> Field:
 #: an output of a drifter (:data:`impactbar.physical.outputs.OUTPUTS`) takes its name, unit and long
 #: name from it (:meth:`~impactbar.physical.outputs.Output.column`), its label and format its own
 PHYSICAL_ORBIT_FIELDS = _ORBIT_SI + Schema(
-    Field("blow_energy_J", "energy per blow m v^2 / 2", "J", views={"dict", "table", "cli"},
-          label="E/J", fmt=".2f"),
+    OUTPUTS["impact_energy"].column(views={"dict", "table", "cli"}, label="E/J", fmt=".2f"),
     OUTPUTS["blow_frequency"].column(views={"dict", "table"}),
-    Field("power_W", "impact power", "W", views={"dict", "table", "cli"}, label="P/W", fmt=".1f"),
-    _shown(Field("peak_stress_Pa", "peak compressive stress at impact", "Pa", views={"dict", "table", "cli"},
-                 fmt=".1f"), "sigma"),
+    OUTPUTS["impact_power"].column(views={"dict", "table", "cli"}, label="P/kW", fmt=".4f"),
+    _shown(Field("peak_piston_stress_Pa", "peak compressive stress in the piston at impact", "Pa",
+                 views={"dict", "table", "cli"}, fmt=".1f"), "sigma"),
     OUTPUTS["rod_energy"].column(views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
     _shown(OUTPUTS["peak_rod_stress"].column(views={"dict", "table", "cli"}, fmt=".1f"), "rod"),
     OUTPUTS["efficiency"].column(views={"dict", "table", "cli", "cli_rock"}, label="eff.", fmt=".3f"),
@@ -103,16 +103,19 @@ class PhysicalOrbit:
         As in the dimensionless orbit (theory §5, §7).
     max_abs_multiplier : float
         Largest modulus of the Floquet multipliers.
-    blow_energy_J : float
+    impact_energy_J : float
         Energy per blow :math:`m v^2 / 2` (J): the kinetic energy of the piston moving as a rigid body
-        at the struck end's velocity. This is the standard figure of merit of rock drills; it
-        ignores the elastic vibration energy of the piston.
+        at the struck end's velocity (the output ``impact_energy``). This is the standard figure of
+        merit of rock drills; it ignores the elastic vibration energy of the piston
+        (``blow_energy_J`` the name it had: a ``DeprecationWarning``).
     blow_frequency_Hz : float
         Blows per second :math:`\Omega / 2 \pi` (Hz).
-    power_W : float
-        Impact power, energy per blow times blow frequency (W).
-    peak_stress_Pa : float
-        Peak compressive stress at impact (Pa), see :meth:`Hammer.peak_stress_Pa`.
+    impact_power_kW : float
+        Impact power, energy per blow times blow frequency (kW; the output ``impact_power``).
+        ``power_W``, the name it had, gives it in W, :math:`E f_b` (a ``DeprecationWarning``).
+    peak_piston_stress_Pa : float
+        Peak compressive stress in the piston at impact (Pa), see :meth:`Hammer.peak_stress_Pa`
+        (``peak_stress_Pa`` the name it had: a ``DeprecationWarning``).
     rod_energy_J : float
         Energy carried into the rod by the transmitted stress wave per blow (J), :math:`\int F^2 / Z_s \, dt`.
         Under the wave law (theory §4b) from the contact solved by characteristics, the drive
@@ -140,10 +143,10 @@ class PhysicalOrbit:
 
     orbit: object
     scales: object = field(repr=False)
-    blow_energy_J: float
+    impact_energy_J: float
     blow_frequency_Hz: float
-    power_W: float
-    peak_stress_Pa: float
+    impact_power_kW: float
+    peak_piston_stress_Pa: float
     rod_energy_J: float
     peak_rod_stress_Pa: float
     efficiency: float
@@ -155,6 +158,11 @@ class PhysicalOrbit:
 
     #: the declared fields (:data:`PHYSICAL_ORBIT_FIELDS`)
     fields: ClassVar[Schema] = PHYSICAL_ORBIT_FIELDS
+
+    peak_stress_Pa = renamed_attribute("peak_stress_Pa", "peak_piston_stress_Pa")
+    blow_energy_J = renamed_attribute("blow_energy_J", "impact_energy_J")
+    power_W = renamed_attribute("power_W", "impact_power_kW",
+                                lambda o: o.impact_energy_J * o.blow_frequency_Hz)  # (W, as it was)
 
     def __getattr__(self, name: str):
         """The orbit's fields in SI: its own value, or converted with the hammer's scales."""
@@ -171,8 +179,9 @@ class PhysicalOrbit:
         energy = 0.5 * hammer.mass_kg * v * v
         fb = hammer.blow_frequency_Hz
         rod = _rod_figures(orbit, hammer, v)
-        return cls(orbit=orbit, scales=hammer.scales, blow_energy_J=energy, blow_frequency_Hz=fb,
-                   power_W=energy * fb, peak_stress_Pa=float(hammer.peak_stress_Pa(v)), **rod)
+        return cls(orbit=orbit, scales=hammer.scales, impact_energy_J=energy, blow_frequency_Hz=fb,
+                   impact_power_kW=energy * fb / 1e3,
+                   peak_piston_stress_Pa=float(hammer.peak_stress_Pa(v)), **rod)
 
     def to_dict(self) -> dict:
         """JSON-ready figures (without the dimensionless orbit object): the fields of
