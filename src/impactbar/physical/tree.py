@@ -362,9 +362,9 @@ def convert_back(scale: str | Callable, drifter, value: float) -> float:
     Parameters
     ----------
     scale : str or callable
-        A name in :data:`SCALE_STEPS`, or a function of the drifter giving the factor from SI.
+        The field's scale, as :func:`convert` takes it.
     drifter : CircuitDrifter
-        Whose scales (the piston's length and mass, the rear area, :math:`\Omega`).
+        Whose scales.
     value : float
         Dimensionless.
 
