@@ -131,7 +131,7 @@ def integrators(d, drive):
     model = d.model()
     q, v = np.array([-0.06 / d.bar.length_m]), np.array([0.0])
     state = DriveState((1, 0, 1, 0), np.array([2.2, 2.2, 2.2, 1.0]))
-    par = drive._par(model, state.mode)
+    par = K.preset_par(drive, model, state.mode)
     n = 6 + K.N_ENERGY
     calls = [0]
 

@@ -44,7 +44,7 @@ def _loop_events(f, z, par, M, g, n):
 @nb.njit
 def _kernel_events(z, par, M, g, first):
     """The hand-written kernel's events in the network's signature."""
-    K.circuit_events(z[3], z[2], par, g, first)
+    K.circuit_events(z[3], z[2], par, K.HEAD + 3 * M, g, first)
 
 
 def per_call(f, y, par, M, out, n=200_000, reps=5, loop=_loop):
@@ -73,7 +73,7 @@ def main():
         model = c.model().with_(n_modes=n_modes)
         M = n_modes + 1
         n = 2 * M + 4
-        par = drive._par(model, mode)
+        par = K.preset_par(drive, model, mode)
         net = drive._network_par(model, mode)
         y = np.concatenate((np.full(2 * M, 0.01), [0.5, 1.0, 1.5, 0.3], np.zeros(K.N_ENERGY)))
         gen = NG.generate(net[K.HEAD + 3 * M:])

@@ -12,8 +12,9 @@ state is ``Y = (w, p_f, p_r, p_s, x_v, I, E_0..E_7)``: the driven end's displace
 quadratures of ``circuit_field_reference``. The vector field is its ``_base`` on a one-mode bar whose
 driven end is ``q_0 = -w`` moving at ``q_0' = u_t(0)`` (the same equations, one source of them).
 
-``ext = (a, 1/Z)`` is set by the caller on each stretch where ``a`` is constant (the lattice's step)
-or each evaluation (the wave law's smooth ``a``).
+``par`` is ``circuit_field_reference.preset_par`` of the drive on a one-mode bar. ``ext = (a, 1/Z)``
+is set by the caller on each stretch where ``a`` is constant (the lattice's step) or each evaluation
+(the wave law's smooth ``a``).
 """
 
 import numba as nb
@@ -31,6 +32,9 @@ N_EVENTS = 3
 FLIGHT_EVENTS = (B.RAMP_EV, B.ACC_EV, B.REL_EV)
 #: the room :func:`rhs_in` and :func:`jac_in` take for their intermediate values
 SCRATCH = 6 + B.N_ENERGY + 40
+#: where ``circuit_field_reference``'s own parameters of the preset's parts start in ``par`` (its
+#: ``preset_par`` on the one-mode bar: ``HEAD + 3 M``, ``M = 1``)
+OWN = B.HEAD + 3
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -39,7 +43,7 @@ _JIT = dict(cache=True, nogil=True, error_model="numpy")
 def _one_mode(y, par, ext, buf):
     """The one-mode bar state of ``circuit_field_reference._base`` for ``y``: ``(q_0, q_0', p_f, p_r,
     p_s, x_v)`` with ``q_0 = -w``, ``q_0' = u_t(0) = a + p / Z``; returns ``u_t(0)``."""
-    p = y[2] - par[B.ALPHA] * y[1]
+    p = y[2] - par[OWN + K.ALPHA] * y[1]
     ut = ext[EXT_A] + p * ext[EXT_IZ]
     buf[0] = -y[0]
     buf[1] = ut
@@ -67,7 +71,7 @@ def rhs_in(y, yp, par, ext, work):
     yp[0] = -ut
     for i in range(4):
         yp[1 + i] = out[2 + i]
-    yp[5] = y[2] - par[B.ALPHA] * y[1]
+    yp[5] = y[2] - par[OWN + K.ALPHA] * y[1]
     for i in range(B.N_ENERGY):
         yp[6 + i] = out[6 + i]
 
@@ -90,7 +94,7 @@ def jac_in(y, JJ, par, ext, work):
     _one_mode(y, par, ext, buf)
     A = work[6 + B.N_ENERGY:6 + B.N_ENERGY + 36].reshape((6, 6))
     K.jac_base(buf, par, 1, A)
-    alpha, iz = par[B.ALPHA], ext[EXT_IZ]
+    alpha, iz = par[OWN + K.ALPHA], ext[EXT_IZ]
     dut = work[6 + B.N_ENERGY + 36:6 + B.N_ENERGY + 40]  # d u_t(0) / d(p_f, p_r, p_s, x_v)
     dut[0] = -alpha * iz
     dut[1] = iz
@@ -111,7 +115,7 @@ def events(y, g, par):
     """The event functions during a blow (their zeros; inactive ones held at 1): the ramp's end, the
     supply pressure through the pre-charge and through the relief pressure (as
     ``circuit_field_reference.events``)."""
-    K.circuit_events(y[4], y[3], par, g, 0)
+    K.circuit_events(y[4], y[3], par, OWN, g, 0)
 
 
 @nb.njit(**_JIT)

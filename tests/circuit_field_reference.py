@@ -9,45 +9,26 @@ modes (eq. 6), the circuit's state, eight energy quadratures (the terms of the a
 §11: pump work, work on the piston, orifice losses, energy to the tank, the compression work of the
 front, rear and supply volumes, the accumulator's gas) and, for the variational equations, the
 fundamental matrix ``Phi`` of the first ``n = 2 N + 6`` components, stored by columns
-(``impactbar.drives.circuit._bar``). ``par`` is the drive's (``HydraulicCircuitDrive._par``), its
-indices those of ``_bar``, without the network after it.
+(``impactbar.drives.circuit._bar``). ``par`` (:func:`preset_par`) is the drive's
+(``HydraulicCircuitDrive._par``: the bar's entries, indices those of ``_bar``) with, in place of the
+network, this reference's own parameters of the preset's parts (indices below, from ``HEAD + 3 M``),
+written here from the drive's parts: the library's kernels read the network instead.
 """
 
+import math
 from types import SimpleNamespace
 
 import numba as nb
 import numpy as np
 
 from impactbar.drives.circuit._bar import (
-    ACC,
-    ALPHA,
-    BETA,
     DAMP,
-    HASACC,
-    HASREL,
     HEAD,
-    HELD,
-    KF,
-    KREL,
-    KV,
     N_ENERGY,
     N_EVENTS,
     NM,
-    NPOL,
-    NU0,
-    NUF,
-    NUR,
-    NUS,
-    OPEN,
-    P0,
-    PREL,
-    PT,
-    PTR2,
-    QP,
     RAMP_EV,
-    REL,
     VAR,
-    XRATE,
     bar_events,
     end_motion,
     jac_blocks,
@@ -59,6 +40,41 @@ from impactbar.dynamics.compiled import CACHE
 
 _JIT = dict(cache=CACHE, nogil=True, error_model="numpy")
 
+# this reference's parameters of the preset's parts, from ``HEAD + 3 M`` in ``par``: the chambers',
+# the valve's and the supply's values, the accumulator's, the oil's, then the mode's flags and the
+# parts present
+ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
+HELD, ACC, REL, XRATE, OPEN, HASREL, HASACC = range(15, 22)
+N_PRESET = 22
+
+
+def preset_par(drive, model, mode, variational=False):
+    """The parameter vector of these kernels for the preset drive ``drive`` on the bar ``model`` in
+    the mode ``mode = (target, moving, acc, relief)``: the drive's (its bar's entries) and then this
+    reference's parameters of the preset's parts (module docstring), from the drive's parts."""
+    ch, va, su, oil, acc = drive.chambers, drive.valve, drive.supply, drive.oil, drive.accumulator
+    target, moving, acc_on, rel_on = mode[:4]
+    has_acc = acc is not None and acc.volume > 0 and not su.held
+    own = np.zeros(N_PRESET)
+    own[ALPHA], own[NUR], own[NUF] = ch.area_ratio, ch.rear_volume, ch.front_volume
+    own[KV], own[KF] = va.coefficient, su.front_coefficient
+    own[QP] = su.pump_flow if su.pump_flow is not None else 0.0
+    own[NUS], own[PT] = su.hose_volume, su.tank_pressure
+    own[PREL] = su.relief_pressure if math.isfinite(su.relief_pressure) else 1e300
+    own[KREL] = su.relief_coefficient
+    own[P0] = acc.precharge if acc is not None else 1.0
+    own[NU0] = acc.volume if has_acc else 0.0
+    own[NPOL] = acc.polytropic_exponent if acc is not None else 1.4
+    own[BETA], own[PTR2] = oil.bulk_modulus, oil.transition_pressure ** 2
+    own[HELD] = 1.0 if su.held else 0.0
+    own[ACC], own[REL] = float(acc_on), float(rel_on)
+    tau = va.switching_time
+    own[XRATE] = (1.0 if target else -1.0) / tau if moving else 0.0
+    own[OPEN] = (1.0 if target else -1.0) if moving else 0.0
+    own[HASREL] = 1.0 if su.has_relief and not su.held else 0.0
+    own[HASACC] = 1.0 if has_acc else 0.0
+    return np.concatenate((drive._par(model, mode, variational), own))
+
 
 @nb.njit(**_JIT)
 def _flows(y, par, M):
@@ -66,19 +82,20 @@ def _flows(y, par, M):
     C)``."""
     w, wd = end_motion(y, par, M)
     F = 2 * M
+    o = HEAD + 3 * M
     pf, pr, ps, xv = y[F], y[F + 1], y[F + 2], y[F + 3]
-    ptr2 = par[PTR2]
-    qf = par[KF] * phi(ps - pf, ptr2)
-    qin = par[KV] * xv * phi(ps - pr, ptr2)
-    qout = par[KV] * (1.0 - xv) * phi(pr - par[PT], ptr2)
-    qrel = par[KREL] * (ps - par[PREL]) if par[REL] > 0.5 else 0.0
-    nuf = par[NUF] + par[ALPHA] * w
-    nur = par[NUR] - w
+    ptr2 = par[o + PTR2]
+    qf = par[o + KF] * phi(ps - pf, ptr2)
+    qin = par[o + KV] * xv * phi(ps - pr, ptr2)
+    qout = par[o + KV] * (1.0 - xv) * phi(pr - par[o + PT], ptr2)
+    qrel = par[o + KREL] * (ps - par[o + PREL]) if par[o + REL] > 0.5 else 0.0
+    nuf = par[o + NUF] + par[o + ALPHA] * w
+    nur = par[o + NUR] - w
     ca = 0.0
-    if par[ACC] > 0.5:
-        n = par[NPOL]
-        ca = par[NU0] / n * par[P0] ** (1.0 / n) * ps ** (-1.0 / n - 1.0)
-    C = par[NUS] / par[BETA] + ca
+    if par[o + ACC] > 0.5:
+        n = par[o + NPOL]
+        ca = par[o + NU0] / n * par[o + P0] ** (1.0 / n) * ps ** (-1.0 / n - 1.0)
+    C = par[o + NUS] / par[o + BETA] + ca
     return w, wd, qf, qin, qout, qrel, nuf, nur, ca, C
 
 
@@ -86,29 +103,30 @@ def _flows(y, par, M):
 def _base(y, par, M, out):
     """The vector field of the first ``n`` components and the energy integrands into ``out``."""
     F = 2 * M
+    o = HEAD + 3 * M
     w, wd, qf, qin, qout, qrel, nuf, nur, ca, C = _flows(y, par, M)
     pf, pr, ps = y[F], y[F + 1], y[F + 2]
-    alpha, b, d = par[ALPHA], par[BETA], par[DAMP]
+    alpha, b, d = par[o + ALPHA], par[o + BETA], par[DAMP]
     p = pr - alpha * pf
     for i in range(M):
         out[i] = y[M + i]
         out[M + i] = p - d * y[M + i] - par[HEAD + M + i] * y[i]
     dpf = b / nuf * (qf - alpha * wd)
     dpr = b / nur * (qin - qout + wd)
-    held = par[HELD] > 0.5
-    dps = 0.0 if held else (par[QP] - qf - qin - qrel) / C
+    held = par[o + HELD] > 0.5
+    dps = 0.0 if held else (par[o + QP] - qf - qin - qrel) / C
     out[F] = dpf
     out[F + 1] = dpr
     out[F + 2] = dps
-    out[F + 3] = par[XRATE]
+    out[F + 3] = par[o + XRATE]
     E = F + 4
-    out[E] = ps * (qf + qin) if held else ps * par[QP]
+    out[E] = ps * (qf + qin) if held else ps * par[o + QP]
     out[E + 1] = -p * wd
-    out[E + 2] = qf * (ps - pf) + qin * (ps - pr) + qout * (pr - par[PT]) + qrel * (ps - par[PT])
-    out[E + 3] = par[PT] * (qout + qrel)
+    out[E + 2] = qf * (ps - pf) + qin * (ps - pr) + qout * (pr - par[o + PT]) + qrel * (ps - par[o + PT])
+    out[E + 3] = par[o + PT] * (qout + qrel)
     out[E + 4] = nuf * pf * dpf / b
     out[E + 5] = nur * pr * dpr / b
-    out[E + 6] = 0.0 if held else par[NUS] * ps * dps / b
+    out[E + 6] = 0.0 if held else par[o + NUS] * ps * dps / b
     out[E + 7] = 0.0 if held else ps * ca * dps
 
 
@@ -121,9 +139,11 @@ def jac_base(y, par, M, A):
         for j in range(n):
             A[i, j] = 0.0
     F = 2 * M
+    o = HEAD + 3 * M
     w, wd, qf, qin, qout, qrel, nuf, nur, ca, C = _flows(y, par, M)
     pf, pr, ps, xv = y[F], y[F + 1], y[F + 2], y[F + 3]
-    alpha, b, d, kv, kf, ptr2 = par[ALPHA], par[BETA], par[DAMP], par[KV], par[KF], par[PTR2]
+    alpha, b, d = par[o + ALPHA], par[o + BETA], par[DAMP]
+    kv, kf, ptr2 = par[o + KV], par[o + KF], par[o + PTR2]
     for i in range(M):
         A[i, M + i] = 1.0
         A[M + i, i] = -par[HEAD + M + i]
@@ -141,19 +161,19 @@ def jac_base(y, par, M, A):
     dqf = kf * dphi(ps - pf, ptr2)
     gin = phi(ps - pr, ptr2)
     dgin = dphi(ps - pr, ptr2)
-    gout = phi(pr - par[PT], ptr2)
-    dgout = dphi(pr - par[PT], ptr2)
+    gout = phi(pr - par[o + PT], ptr2)
+    dgout = dphi(pr - par[o + PT], ptr2)
     A[F, F] = -b / nuf * dqf
     A[F, F + 2] = b / nuf * dqf
     A[F + 1, F + 1] = -b / nur * kv * (xv * dgin + (1.0 - xv) * dgout)
     A[F + 1, F + 2] = b / nur * kv * xv * dgin
     A[F + 1, F + 3] = b / nur * kv * (gin + gout)
-    if par[HELD] < 0.5:
+    if par[o + HELD] < 0.5:
         dC = 0.0
-        if par[ACC] > 0.5:
-            dC = ca * (-1.0 / par[NPOL] - 1.0) / ps
-        drel = par[KREL] if par[REL] > 0.5 else 0.0
-        num = par[QP] - qf - qin - qrel
+        if par[o + ACC] > 0.5:
+            dC = ca * (-1.0 / par[o + NPOL] - 1.0) / ps
+        drel = par[o + KREL] if par[o + REL] > 0.5 else 0.0
+        num = par[o + QP] - qf - qin - qrel
         A[F + 2, F] = dqf / C
         A[F + 2, F + 1] = kv * xv * dgin / C
         A[F + 2, F + 2] = (-dqf - kv * xv * dgin - drel) / C - num * dC / (C * C)
@@ -192,23 +212,25 @@ def events(t, y, g, par):
     M = int(par[NM])
     F = 2 * M
     bar_events(y, par, M, g)
-    circuit_events(y[F + 3], y[F + 2], par, g, RAMP_EV)
+    circuit_events(y[F + 3], y[F + 2], par, HEAD + 3 * M, g, RAMP_EV)
 
 
 @nb.njit(**_JIT)
-def circuit_events(xv, ps, par, g, first):
+def circuit_events(xv, ps, par, o, g, first):
     """The circuit's own event functions into ``g[first:first + 3]``, from the spool's position
-    ``xv`` and the supply pressure ``ps`` (inactive ones held at 1): the ramp's end, the supply
+    ``xv``, the supply pressure ``ps`` and the preset's parameters from ``par[o]`` (inactive ones held
+    at 1): the ramp's end, the supply
     through the pre-charge and through the relief pressure (each pressure's :func:`_off_level`);
     the flights' (:func:`events`) and the blows' (``circuit_blow_reference.events``)."""
-    if par[OPEN] > 0.5:
+    if par[o + OPEN] > 0.5:
         g[first] = xv - 1.0
-    elif par[OPEN] < -0.5:
+    elif par[o + OPEN] < -0.5:
         g[first] = xv
     else:
         g[first] = 1.0
-    g[first + 1] = _off_level(ps - par[P0], par[ACC], par[P0]) if par[HASACC] > 0.5 else 1.0
-    g[first + 2] = _off_level(ps - par[PREL], par[REL], par[PREL]) if par[HASREL] > 0.5 else 1.0
+    p0, prel = par[o + P0], par[o + PREL]
+    g[first + 1] = _off_level(ps - p0, par[o + ACC], p0) if par[o + HASACC] > 0.5 else 1.0
+    g[first + 2] = _off_level(ps - prel, par[o + REL], prel) if par[o + HASREL] > 0.5 else 1.0
 
 
 @nb.njit(**_JIT)
@@ -245,14 +267,14 @@ def _callbacks():
     @nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
     def rhs_c(t, y, yp, user_data):
         M, N = _sizes(user_data)
-        par = nb.carray(user_data, HEAD + 3 * M)
+        par = nb.carray(user_data, HEAD + 3 * M + N_PRESET)
         rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
         return 0
 
     @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
     def jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
         M, N = _sizes(user_data)
-        par = nb.carray(user_data, HEAD + 3 * M)
+        par = nb.carray(user_data, HEAD + 3 * M + N_PRESET)
         JJ = nb.carray(_dense_data(J), (N, N)).T
         jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
         return 0
@@ -260,7 +282,7 @@ def _callbacks():
     @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
     def jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
         M, N = _sizes(user_data)
-        par = nb.carray(user_data, HEAD + 3 * M)
+        par = nb.carray(user_data, HEAD + 3 * M + N_PRESET)
         n = 2 * M + 4
         A = np.empty((n, n))
         jac_base(nb.carray(_nv_data(y), N), par, M, A)
@@ -270,7 +292,7 @@ def _callbacks():
     @nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
     def events_c(t, y, g, user_data):
         M, N = _sizes(user_data)
-        par = nb.carray(user_data, HEAD + 3 * M)
+        par = nb.carray(user_data, HEAD + 3 * M + N_PRESET)
         events(t, nb.carray(_nv_data(y), N), nb.carray(g, N_EVENTS), par)
         return 0
 
@@ -279,4 +301,4 @@ def _callbacks():
 
 #: the hand-written kernels as ``circuit_flight``'s ``kernels`` (the names of a generated module's)
 KERNELS = SimpleNamespace(flight_rhs=rhs, flight_jac=jac, flight_events=events, field_at=field_at,
-                          jac_base=jac_base, CALLBACKS=_callbacks(), network=False)
+                          jac_base=jac_base, CALLBACKS=_callbacks(), network=False, par=preset_par)

@@ -168,6 +168,7 @@ def test_drifter_command_refuses_a_hammer(capsys):
 def test_circuit_si_parameters_are_the_drive_parameters():
     """Every config key of ``SI_PARAMETERS`` converts the preset's own config value to the value
     its dimensionless drive holds (two paths: the drive's builder and the SI table)."""
+    from impactbar.physical import tree
     from impactbar.physical.circuit import CIRCUIT_PRESETS, SI_PARAMETERS, circuit_preset
 
     d = circuit_preset("circuit-drifter")
@@ -179,9 +180,9 @@ def test_circuit_si_parameters_are_the_drive_parameters():
             continue
         got, value = d.to_dimensionless(key, config[section][name])
         assert got == param
-        assert value == pytest.approx(drive.value(param), rel=1e-12)
+        assert value == drive.value(param)  # (the config's conversion: the same to the bit)
         assert d.from_dimensionless(key, value) == pytest.approx(
-            d.to_dimensionless(key, config[section][name])[1] / d._si_factor(key), rel=1e-12)
+            tree.read_si(key, config[section][name]), rel=1e-12)
         checked += 1
     assert checked >= 14
     with pytest.raises(ValueError, match="parameter must be one of accumulator.precharge"):

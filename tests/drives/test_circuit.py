@@ -62,7 +62,7 @@ def test_flight_against_radau():
     state = DriveState((1, 0, 1, 0), np.array([0.9, 0.9, 0.9, 1.0]))
     fl = circuit_flight(drive, RIGID, state, 0.0, q, v, 50.0)
     assert fl.end == ARRIVAL
-    par = drive._par(RIGID, state.mode)
+    par = K.preset_par(drive, RIGID, state.mode)
     n = 2 + 4 + K.N_ENERGY
 
     def f(t, y):

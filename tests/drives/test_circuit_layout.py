@@ -91,7 +91,7 @@ def test_layout_names_follow_the_kernel():
     mode = (1, 1, 1, 0)  # the spool ramping open, the accumulator holding oil
     Y = np.concatenate((q, v, z, np.zeros(K.N_ENERGY)))
     out = np.empty_like(Y)
-    K.field_at(Y[None, :], drive._par(_rate_model(1), mode), out[None, :])
+    K.field_at(Y[None, :], K.preset_par(drive, _rate_model(1), mode), out[None, :])
     force = out[1]  # the piston's acceleration at rest: the force (theory §11), from the kernel
     assert drive.force(mode, z, q, v) == force
     assert force == z[L["rear"]] - 0.5 * z[L["front"]] == z[L["p_r"]] - 0.5 * z[L["p_f"]]

@@ -73,7 +73,7 @@ def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_mod
     for mode in itertools.product((0, 1), (0, 1), (0, 1), (0, 1)):
         if drive.supply.held and mode[3]:
             continue  # the kernel's held supply's work leaves out a relief flow that cannot be there
-        par = drive._par(model, mode)
+        par = K.preset_par(drive, model, mode)
         net = drive._network_par(model, mode)
         assert NI.sizes(net, M) == (4, 3, K.N_ENERGY, 3)
         gen = NG.generate(net[K.HEAD + 3 * M:])
@@ -86,7 +86,7 @@ def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_mod
             K.jac_base(y, par, M, A)
             NI.jac_base(y, net, M, B)
             g, h = np.empty(3), np.full(3, np.nan)
-            K.circuit_events(y[2 * M + 3], y[2 * M + 2], par, g, 0)
+            K.circuit_events(y[2 * M + 3], y[2 * M + 2], par, K.HEAD + 3 * M, g, 0)
             NI.events(y[2 * M:], net, M, h, 0, -y[0])
             assert np.array_equal(_bits(got), _bits(want)), (mode, got - want)
             assert np.array_equal(_bits(B), _bits(A)), (mode, np.argwhere(_bits(B) != _bits(A)))
@@ -335,15 +335,17 @@ def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, 
 
 # -- the library runs the generated kernel only ----------------------------------------------------------
 
-#: the preset's scalars in ``par`` (``_bar``) that only equations of the preset written by hand read: the
-#: generated code reads each part's values from its records
+#: the parameters of the preset's parts that only its equations written by hand read (the reference's own,
+#: after the bar's entries of ``par``: ``circuit_field_reference.preset_par``): the generated code reads
+#: each part's values from its records
 _PRESET_SCALARS = {"NUR", "NUF", "KV", "KF", "QP", "NUS", "PT", "PREL", "KREL", "P0", "NU0", "NPOL", "BETA",
-                   "PTR2", "HELD", "PSH", "ACC", "REL", "XRATE", "OPEN", "HASREL", "HASACC"}
+                   "PTR2", "HELD", "ACC", "REL", "XRATE", "OPEN", "HASREL", "HASACC"}
 
 
 def _hand_written_reads(path):
-    """``(function, index)`` of each read ``par[X]`` of a preset scalar (:data:`_PRESET_SCALARS`, bare
-    or as a module's attribute) inside a compiled function (``njit`` or ``cfunc``) of ``path``."""
+    """``(function, index)`` of each read ``par[X]`` or ``par[o + X]`` (from the reference's offset) of a
+    preset scalar (:data:`_PRESET_SCALARS`, bare or as a module's attribute) inside a compiled function
+    (``njit`` or ``cfunc``) of ``path``."""
     import ast
 
     found = []
@@ -354,6 +356,8 @@ def _hand_written_reads(path):
         for node in ast.walk(fn):
             if isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Load):
                 key = node.slice
+                if isinstance(key, ast.BinOp) and ast.unparse(key.left) == "o":  # (from the offset o)
+                    key = key.right
                 name = key.id if isinstance(key, ast.Name) else key.attr if isinstance(key, ast.Attribute) \
                     else None
                 if name in _PRESET_SCALARS:
@@ -375,3 +379,23 @@ def test_no_library_module_holds_the_preset_circuits_equations_by_hand():
     assert found == {}
     reference = Path(__file__).resolve().parents[1] / "circuit_field_reference.py"
     assert {f for f, _ in _hand_written_reads(reference)} >= {"_flows", "_base", "jac_base", "circuit_events"}
+
+
+def test_par_holds_only_what_the_librarys_kernels_read():
+    """Each scalar slot of ``par`` (``_bar``'s indices below ``HEAD``) is read as ``par[NAME]`` by a
+    kernel of the library (a compiled function, or the code :mod:`_netgen` and :mod:`_endgen` write):
+    the preset's parts' values are not there (the tests' reference writes its own,
+    ``circuit_field_reference.preset_par``)."""
+    import re
+    from pathlib import Path
+
+    import impactbar.drives.circuit as pkg
+    from impactbar.drives.circuit import _bar
+
+    slots = {n for n, v in vars(_bar).items() if type(v) is int and n.isupper() and 0 <= v < _bar.HEAD
+             and not n.endswith("_EV") and not n.startswith("N_")}
+    assert "DAMP" in slots and sorted(vars(_bar)[n] for n in slots) == list(range(_bar.HEAD))
+    text = "".join(p.read_text() for p in Path(pkg.__file__).parent.rglob("*.py"))
+    read = {n for n in slots if re.search(rf"\bpar\[{n}\]", text)}
+    assert read == slots, sorted(slots - read)
+    assert not slots & _PRESET_SCALARS

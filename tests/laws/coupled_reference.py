@@ -234,6 +234,7 @@ def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14, dura
     ['model', 'drive', 'state', 'q', 'v']
     """
     import circuit_blow_reference as EK
+    import circuit_field_reference as FK
     from impactbar.drives.circuit.drive import _rate_model
 
     law = model.law
@@ -251,7 +252,7 @@ def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14, dura
     v0 = float(np.asarray(v, dtype=float)[0])
     mode = state.mode
     z0 = np.array(state.z, dtype=float)
-    par = drive._par(_rate_model(1), mode)
+    par = FK.preset_par(drive, _rate_model(1), mode)
     alpha = float(drive.chambers.area_ratio)
     L = drive.layout
     p0 = float(z0[L["rear"]] - alpha * z0[L["front"]])

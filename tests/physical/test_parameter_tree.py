@@ -14,6 +14,7 @@ from impactbar.physical import tree
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "impactbar"
 DOCS = Path(__file__).resolve().parents[2] / "docs"
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _written(node) -> str | None:
@@ -360,3 +361,25 @@ def test_the_drive_rounds_each_field_as_its_scale_declares():
     # (the odd values are odd: a factor would round some of them otherwise)
     assert si["tank_pressure_Pa"] * (1.0 / P) != by_hand["supply.tank_pressure"]
     assert si["transition_pressure_Pa"] * (1.0 / P) != by_hand["oil.transition_pressure"]
+
+
+@pytest.mark.parametrize("key", ["supply.tank_pressure", "supply.pump_flow", "chambers.rear_volume",
+                                 "valve.switch_in", "supply.relief_coefficient", "rock.k"])
+def test_a_continued_value_is_the_configs_to_the_bit(key):
+    """A value a continuation is asked to reach (``to_dimensionless``, as ``continue_circuit`` and the
+    CLI convert it) is the parameter of the drifter whose config sets that value, to the bit: one
+    conversion, the scale's declared steps (:func:`tree.convert`), for a scale of one step and for a
+    product of scales (the relief's ``K P / Q``, the rock's ``K / (m Omega^2)``); and converted back
+    (``from_dimensionless``, a branch's points in SI), the SI value within an ulp of rounding."""
+    from impactbar.continuation.parameters import parameter_value
+    from impactbar.physical.loader import build, read_config, with_values
+
+    source = ROOT / "examples" / "circuit_drifter_rock.toml" if key.startswith("rock.") else "circuit-drifter"
+    config, f = read_config(source)[0], tree.FIELDS[key]
+    example = tree.read_si(key, f.example.strip("'"))
+    for factor in (0.731, 1.137, 0.917, 1.291, 0.613):  # (odd values: a factor 1 / P rounds some apart)
+        value = f"{example * factor!r} {f.unit}"
+        drifter = build(with_values(config, {key: value}))
+        name, x = drifter.to_dimensionless(key, value)
+        assert x.hex() == parameter_value(drifter.model(), drifter.drive(), name).hex(), (key, value)
+        assert abs(drifter.from_dimensionless(key, x) - example * factor) <= math.ulp(example * factor)

@@ -196,17 +196,19 @@ class CircuitDrifter(_ScaledDrifter):
         return tree.FIELDS.get(name) if isinstance(name, str) and name in tree.FIELDS else \
             part_field(self.parts, name)
 
-    def _si_factor(self, name: str) -> float:
-        """The factor from the SI value of the config key ``name`` to its dimensionless parameter
-        (its declared scale: :func:`~impactbar.physical.tree.dimensionless_factor`)."""
+    def _si_scale(self, name: str):
+        """The scale that takes the SI value of the config key ``name`` to its dimensionless parameter
+        as the config's value is taken (:func:`~impactbar.physical.tree.convert`): the tree's field's
+        (:func:`~impactbar.physical.tree.continued`), a part's field's factor (as
+        :meth:`~impactbar.physical.circuit_parts.PartSpec.build` builds the part)."""
         f = part_field(self.parts, name)
         if f is None:
             if isinstance(name, str) and name.startswith("valve.") and isinstance(self.config, dict) \
                     and "valve" not in self.config and self.parts:
                 raise ValueError(f"{name}: this drifter has no [valve]: the part "
                                  f"{valve_stand_in(self.config, self.parts)} stands in for it")
-            return tree.dimensionless_factor(self, name)
-        return tree.SCALES[f.scale](self)
+            return tree.continued(self, name).scale
+        return tree.SCALES[f.scale]
 
     def to_dimensionless(self, name: str, value) -> tuple[str, float]:
         r"""The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
@@ -228,7 +230,9 @@ class CircuitDrifter(_ScaledDrifter):
             Dimensionless (pressures in 10 MPa, volumes in :math:`A_r L`, flows in :math:`A_r L \Omega`; the
             rock's stiffnesses in :math:`m \Omega^2`, the feed in :math:`P A_r`, the bit's mass in the
             piston's: theory §4d). The rock's keys (:data:`ROCK_SI_PARAMETERS`) need a drill
-            string.
+            string. Converted as the config's value is (its scale's steps,
+            :func:`~impactbar.physical.tree.convert`): the same to the bit as the parameter of the
+            drifter whose config sets ``value``.
 
         Raises
         ------
@@ -243,20 +247,21 @@ class CircuitDrifter(_ScaledDrifter):
         >>> circuit_preset("circuit-drifter").to_dimensionless("accumulator.precharge", "12 MPa")
         ('precharge', 1.2)
         """
-        factor = self._si_factor(name)
+        scale = self._si_scale(name)
         f = self.key_field(name)
-        return f.parameter, to_si(name, value, f.unit, f.example) * factor
+        return f.parameter, tree.convert(scale, self, to_si(name, value, f.unit, f.example))
 
     def from_dimensionless(self, name: str, value: float) -> float:
         """The SI value (in its declared unit) of the config key ``name`` whose
-        dimensionless parameter has ``value``: the inverse of :meth:`to_dimensionless`.
+        dimensionless parameter has ``value``: the inverse of :meth:`to_dimensionless`, its scale's
+        steps undone (:func:`~impactbar.physical.tree.convert_back`).
 
         Raises
         ------
         ValueError
             An unknown key.
         """
-        return float(value) / self._si_factor(name)
+        return tree.convert_back(self._si_scale(name), self, float(value))
 
     def circuit_graph(self):
         """The circuit's nodes and parts as a graph

@@ -40,8 +40,8 @@ from dataclasses import dataclass
 
 __all__ = ["Field", "FIELDS", "MACHINES", "SCALES", "field", "fields", "declared", "read_si",
            "config_sections", "section_keys", "required_keys", "integer_keys", "continuable_keys",
-           "real_keys", "in_sections", "typical_ranges", "dimensionless_factor", "refuse_continuation",
-           "markdown_table", "SCALE_STEPS", "convert", "has", "drive_values"]
+           "real_keys", "in_sections", "typical_ranges", "continued", "refuse_continuation",
+           "markdown_table", "SCALE_STEPS", "convert", "convert_back", "has", "drive_values"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
@@ -314,12 +314,13 @@ SCALE_STEPS: dict[str, tuple] = {
     "time": (("*", lambda d: d.omega_rad_s),),
     "one": (),
     "area": (("/", lambda d: d.si["rear_area_m2"]),),
-    "stiffness": (("*", lambda d: d.bar.length_m), ("/", lambda d: d.scales.force_N)),
+    "stiffness": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s ** 2),),  # (K / (m Omega^2), as the law)
     "force": (("/", lambda d: d.scales.force_N),),
     "mass": (("/", lambda d: d.bar.mass_kg),),
     "damping": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s),),
 }
 _STEP = {"*": operator.mul, "/": operator.truediv}
+_UNDO = {"*": operator.truediv, "/": operator.mul}
 
 
 def convert(scale: str | Callable, drifter, value: float) -> float:
@@ -349,6 +350,38 @@ def convert(scale: str | Callable, drifter, value: float) -> float:
         return value * scale(drifter)
     for step, of in SCALE_STEPS[scale]:
         value = _STEP[step](value, of(drifter))
+    return value
+
+
+def convert_back(scale: str | Callable, drifter, value: float) -> float:
+    r"""The SI value of a dimensionless ``value`` (theory §11, eq. 2): the inverse of :func:`convert`,
+    its scale's :data:`SCALE_STEPS` undone in reverse order (a division by ``f`` undone as a
+    multiplication by ``f``, not by a factor ``1 / f``; a scale given as a function: ``value``
+    divided by its factor).
+
+    Parameters
+    ----------
+    scale : str or callable
+        The field's scale, as :func:`convert` takes it.
+    drifter : CircuitDrifter
+        Whose scales.
+    value : float
+        Dimensionless.
+
+    Returns
+    -------
+    float
+        The value in SI (its field's unit).
+
+    Examples
+    --------
+    >>> convert_back("pressure", None, 1.2), convert_back("one", None, 1.4)
+    (12000000.0, 1.4)
+    """
+    if callable(scale):
+        return value / scale(drifter)
+    for step, of in reversed(SCALE_STEPS[scale]):
+        value = _UNDO[step](value, of(drifter))
     return value
 
 
@@ -510,8 +543,10 @@ def refuse_continuation(key: str) -> Field:
     return f
 
 
-def dimensionless_factor(drifter, key: str) -> float:
-    """The factor from the SI value of ``key`` to its dimensionless parameter, for ``drifter``.
+def continued(drifter, key: str) -> Field:
+    """The declaration of ``key`` for a continuation of ``drifter``: its value in SI converted to the
+    continued parameter by its scale (:func:`convert`, as the config's values are) and back
+    (:func:`convert_back`).
 
     Raises
     ------
@@ -522,7 +557,7 @@ def dimensionless_factor(drifter, key: str) -> float:
     f = refuse_continuation(key)
     if not has(drifter, f.needs):
         raise ValueError(f"parameter {key} is {_LACKING[f.needs]}")
-    return (SCALES[f.scale] if isinstance(f.scale, str) else f.scale)(drifter)
+    return f
 
 
 #: What a drifter with its oil circuit must have for a field of each ``needs`` to count.

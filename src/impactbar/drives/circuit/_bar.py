@@ -10,9 +10,11 @@ components, stored by columns (column ``j`` at ``n + n_E + j n``: each column's 
 its own ``n`` components, so that the Newton matrix is banded, of half-bandwidth ``n - 1``),
 ``Phi' = A Phi`` with ``A`` the Jacobian of the vector field.
 
-``par`` holds the drive's scalars and the mode's flags (indices below), then from :data:`HEAD` the
-struck end's weights, the squared frequencies and the driven end's weights (``M`` each), then the
-circuit's network of part records (:mod:`._network`).
+``par`` holds the few scalars the kernels read besides the network (indices below: the area ratio of
+the blow's force, the valve's switches and whether each is armed, the bar's damping, its mode count
+and whether the flight is variational), then from :data:`HEAD` the struck end's weights, the squared
+frequencies and the driven end's weights (``M`` each), then the circuit's network of part records
+(:mod:`._network`), which holds every part's own parameters.
 """
 
 from __future__ import annotations
@@ -24,10 +26,9 @@ from ...dynamics.compiled import CACHE
 
 __all__ = ["end_motion", "bar_events", "phi_rate", "jac_blocks"]
 
-# parameter indices in ``par``: the preset's scalars, then the mode's flags and the bar's
-ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
-HELD, PSH, XOUT, XIN, ACC, REL, XRATE, ARMO, ARMI, DAMP, NM, OPEN, VAR, HASREL, HASACC = range(15, 30)
-HEAD = 30  # then the struck end's weights (M), the squared frequencies (M) and the driven end's (M)
+# parameter indices in ``par``: the area ratio, the valve's switches and their arming, the bar's
+ALPHA, XOUT, XIN, ARMO, ARMI, DAMP, NM, VAR = range(8)
+HEAD = 8  # then the struck end's weights (M), the squared frequencies (M) and the driven end's (M)
 
 #: the preset circuit's energy quadratures and its flight's events (the bar's three, then the
 #: circuit's from :data:`RAMP_EV`)

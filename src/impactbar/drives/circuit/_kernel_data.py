@@ -6,7 +6,6 @@ vector of a drive and a bar (:func:`_par_base`), the network's generated code by
 from __future__ import annotations
 
 import functools
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -114,27 +113,13 @@ def _par_base(drive, model) -> np.ndarray:
     struck end's weights, squared frequencies and driven end's weights: a stepped piston's too)."""
     M = model.n_modes + 1
     d = float(model.d)
-    ch, va, su, oil, acc = drive.chambers, drive.valve, drive.supply, drive.oil, drive.accumulator
+    va = drive.valve
     par = np.zeros(K.HEAD + 3 * M)
-    par[K.ALPHA], par[K.NUR], par[K.NUF] = ch.area_ratio, ch.rear_volume, ch.front_volume
-    par[K.KV], par[K.KF] = va.coefficient, su.front_coefficient
-    par[K.QP] = su.pump_flow if su.pump_flow is not None else 0.0
-    par[K.NUS], par[K.PT] = su.hose_volume, su.tank_pressure
-    par[K.PREL] = su.relief_pressure if math.isfinite(su.relief_pressure) else 1e300
-    par[K.KREL] = su.relief_coefficient
-    has_acc = acc is not None and acc.volume > 0 and not su.held
-    par[K.P0] = acc.precharge if acc is not None else 1.0
-    par[K.NU0] = acc.volume if has_acc else 0.0
-    par[K.NPOL] = acc.polytropic_exponent if acc is not None else 1.4
-    par[K.BETA], par[K.PTR2] = oil.bulk_modulus, oil.transition_pressure ** 2
-    par[K.HELD] = 1.0 if su.held else 0.0
-    par[K.PSH] = su.pressure if su.held else 0.0
+    par[K.ALPHA] = drive.chambers.area_ratio
     par[K.XOUT] = va.switch_out
     par[K.XIN] = va.switch_in if va.switch_in is not None else -1.0
     par[K.DAMP] = d
     par[K.NM] = float(M)
-    par[K.HASREL] = 1.0 if su.has_relief and not su.held else 0.0
-    par[K.HASACC] = 1.0 if has_acc else 0.0
     par[K.HEAD:K.HEAD + M] = model.end_weights
     par[K.HEAD + M:K.HEAD + 2 * M] = model.frequencies ** 2
     par[K.HEAD + 2 * M:K.HEAD + 3 * M] = model.drive_weights

@@ -262,13 +262,7 @@ class HydraulicCircuitDrive(Drive):
     # -- compiled data ----------------------------------------------------------------------------
     def _par(self, model, mode, variational=False) -> np.ndarray:
         par = _par_base(self, model).copy()
-        target, moving = mode[:2]  # (the hand-written kernels' flags; the bar's head)
-        acc, rel = self._flags(mode)
-        par[K.ACC] = float(acc)
-        par[K.REL] = float(rel)
-        tau = self.valve.switching_time
-        par[K.XRATE] = (1.0 if target else -1.0) / tau if moving else 0.0
-        par[K.OPEN] = (1.0 if target else -1.0) if moving else 0.0
+        target, *_ = mode  # (the valve's target: which switch is armed)
         par[K.ARMO] = 1.0 if target == 0 else 0.0
         par[K.ARMI] = 1.0 if (target == 1 and self.valve.switch_in is not None) else 0.0
         if self._stand_in:  # (a part in the valve's place: no switches)

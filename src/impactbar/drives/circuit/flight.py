@@ -559,9 +559,10 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         topology, the values read from ``par`` with the network after the bar's entries). Else a
         namespace with a generated module's names ``flight_rhs``, ``flight_jac``, ``flight_events``,
         ``field_at`` and ``CALLBACKS`` (``None`` where SUNDIALS is not driven from compiled code),
-        their ``par`` the drive's alone (:mod:`._bar`, no network after it): a reference to check the
-        generated code against (the tests' hand-written preset circuit takes the same steps, to the
-        bit), flown by CVODE only (neither Magnus' method nor DOP853).
+        and ``par(drive, model, mode, variational)``, the parameter vector they read (the drive's,
+        :mod:`._bar`, then in place of the network their own parameters of the drive's parts): a
+        reference to check the generated code against (the tests' hand-written preset circuit takes
+        the same steps, to the bit), flown by CVODE only (neither Magnus' method nor DOP853).
     start : numpy.ndarray or None, optional
         With ``variational``, the fundamental matrix at the flight's start (shape ``(n, n)``; default
         the identity): the flight's ``sensitivity`` is then the matrix carried to its end
@@ -598,7 +599,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         par, code, directions, c, weights = drive._flight_data(model, mode, variational)
         c = c.copy()
     else:
-        par, code, directions = drive._par(model, mode, variational), kernels, drive._directions(mode)
+        par, code, directions = kernels.par(drive, model, mode, variational), kernels, drive._directions(mode)
         c, weights = model.end_weights, model.drive_weights
     field_at = code.field_at
     y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
