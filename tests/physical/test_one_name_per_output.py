@@ -135,6 +135,26 @@ def test_the_constraints_are_named_by_their_outputs():
             assert c.sense == -1, f"{name}: min_<name> is at least the limit"
 
 
+def test_an_output_that_is_a_least_value_is_held_at_least_by_its_own_name():
+    """An output that is a least value over the period (``min_rear_pressure``, ``minimum_pressure``,
+    ``min_chamber_volume``) given as a constraint by its own name bounds it from below, as the named
+    constraints do: ``{"min_rear_pressure": "0.5 MPa"}`` is no cavitation margin read the other way
+    round. Walked over the registry; the margin's sign checked on numbers."""
+    from impactbar.physical.optimize_problem import _constrained
+
+    least = [n for n, o in OUTPUTS.items() if n.startswith(("min_", "minimum_")) and o.of is not None
+             and o.dtype == "f8"]
+    assert {"min_rear_pressure", "min_front_pressure", "min_supply_pressure", "minimum_pressure",
+            "min_chamber_volume"} <= set(least)
+    for name in least:
+        c = constraint_output(name)
+        assert c is not None and c.output.name == name and c.sense == -1, (name, c)
+        rec = _constrained({}, {name: 2.0e6}, {name: 1.0e6})  # the value above its least limit: met
+        assert rec["constraints"][name]["margin"] == 1.0e6 and rec["feasible"], name
+        rec = _constrained({}, {name: 0.5e6}, {name: 1.0e6})
+        assert rec["constraints"][name]["margin"] == -0.5e6 and not rec["feasible"], name
+
+
 def test_a_constraint_given_by_its_old_name_limits_the_same_output_on_the_same_side():
     with pytest.warns(DeprecationWarning, match="constraint 'min_pressure' is now called 'minimum_pressure'"):
         old = constraint_output("min_pressure")

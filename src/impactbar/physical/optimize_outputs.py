@@ -18,7 +18,9 @@ __all__ = ["constraint_output", "piston_and_multipliers", "shank_stress"]
 #: normalised margin for the search (``None``: the limit's size). Each is named by its output: its
 #: name or key, ``min_<name>`` for at least (a least over the period, ``minimum_pressure`` and
 #: ``min_chamber_volume``, at least by its own name). Any other output is a constraint too: by its
-#: name at most the limit, ``min_<name>`` at least (:func:`constraint_output`).
+#: name at most the limit, ``min_<name>`` at least; an output that is itself a least value over the
+#: period (its name ``min_...`` or ``minimum_...``: ``min_rear_pressure``) at least by its own name,
+#: as ``minimum_pressure`` (:func:`constraint_output`).
 _CONSTRAINTS = {"peak_rod_stress": ("peak_rod_stress", 1, None),
                 "max_multiplier": ("max_abs_multiplier", 1, 1.0),
                 "minimum_pressure": ("minimum_pressure", -1, 1e6),
@@ -26,6 +28,11 @@ _CONSTRAINTS = {"peak_rod_stress": ("peak_rod_stress", 1, None),
                 "peak_supply_pressure": ("peak_supply_pressure", 1, None),
                 "min_chamber_volume": ("min_chamber_volume", -1, 1e-4),
                 "min_drilling_rate": ("drilling_rate", -1, None), "piston_mass": ("piston_mass", 1, None)}
+
+
+#: The prefixes of an output that is a least value over the period: constrained by its own name,
+#: its value at least the limit.
+_LEAST = ("min_", "minimum_")
 
 
 class _Constrained(NamedTuple):
@@ -54,6 +61,8 @@ def constraint_output(name: str, kind: str = "circuit") -> _Constrained | None:
     ('impact_velocity', None)
     >>> constraint_output("minimum_pressure", "drifter") is None  # (no oil)
     True
+    >>> constraint_output("min_rear_pressure").sense  # (a least value: at least the limit)
+    -1
     """
     name = current_name(name, "constraint")  # (an old name: a DeprecationWarning)
     if name in _CONSTRAINTS:
@@ -61,6 +70,8 @@ def constraint_output(name: str, kind: str = "circuit") -> _Constrained | None:
     else:
         out, sense, scale = (name, 1, None) if name in OUTPUTS or not name.startswith("min_") else \
             (name[4:], -1, None)
+        if out == name and name.startswith(_LEAST):  # (a least value over the period: at least)
+            sense = -1
     o = OUTPUTS.get(out)
     if o is None or o.of is None or kind not in o.machines or o.dtype != "f8":
         return None

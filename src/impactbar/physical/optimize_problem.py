@@ -253,7 +253,7 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
         what = "" if kind == "circuit" else " of a valve drifter (no oil circuit)"
         raise ValueError(f"constraints: unknown constraint {unknown[0]!r}{what}; one of "
                          f"{', '.join(defaults)}, or an output's name (at most the limit; "
-                         "min_<name>: at least)")
+                         "min_<name>, or a least value's own name, min_... or minimum_...: at least)")
     circuit = sorted(set(given) - set(IDEAL_CONSTRAINTS)) if ideal else []
     if circuit:
         raise ValueError(f"constraints: {circuit[0]!r} is the circuit's; in its ideal limit "
