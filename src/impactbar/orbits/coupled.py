@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..drives.base import DriveState
+from ..laws.abilities import CoupledBlow
 
 __all__ = ["coupled_blow", "blow_piece", "blow_state", "blow_jacobian", "FD_STEP_BLOW", "FD_STEP_EXACT_BLOW"]
 
@@ -130,8 +131,9 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None, 
 
     blow_method = getattr(model.law, "blow_method", None)
     exact = forward is None and blow_method is not None and blow_method(model) == "exact"
-    tangent = getattr(model.law, "driven_tangent", None)
-    if exact and tangent is not None:
+    coupled = model.law.ability(CoupledBlow)  # (a law's blow coupled to a drive, and its tangent)
+    if exact and coupled is not None:
+        tangent = coupled.driven_tangent
         if blow is None:
             _, res, after = blow_state(model, drive, t, q, v, state, settings)
         else:
