@@ -1,4 +1,4 @@
-"""What every flight of the oil circuit in one mode shares, made once (``_kernel_data.flight_data``),
+"""What every flight of the oil circuit in one mode shares, made once (``_flight_cache.flight_data``),
 and the chambers' least volumes from the extremes of the displacement (``Chambers.least_volumes``):
 the Python around each of the spool drill's flights (``examples/circuit_drill_spool.toml``, 415 an
 orbit) without its repeated work, the same numbers to the bit.

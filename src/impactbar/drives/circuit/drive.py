@@ -20,7 +20,7 @@ import numpy as np
 from ..base import Drive, DriveState, GapCrossing, SurfaceEvent
 from . import _bar as K
 from . import _network as NW
-from ._kernel_data import FlightData, _network_code, _par_base, _rate_model, flight_data
+from ._flight_cache import FlightData, _network_code, _par_base, _rate_model, flight_data
 from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .energy import CircuitEnergy
@@ -314,7 +314,7 @@ class HydraulicCircuitDrive(Drive):
     def _flight_data(self, model, mode, variational=False) -> FlightData:
         """The parameters, the generated code and the events' directions of a flight of ``model`` in
         ``mode`` (``variational``: with the variational equations), made once and kept
-        (:func:`._kernel_data.flight_data`)."""
+        (:func:`._flight_cache.flight_data`)."""
         return flight_data(self, model, mode, variational)
 
     @functools.cached_property
