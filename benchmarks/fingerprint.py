@@ -8,6 +8,13 @@ git ref ``REF`` (exported to a fixed folder under the temporary directory, so th
 survives between runs) in a subprocess, and prints, group by group, "same" or the largest relative
 difference and where. ``--only GROUP ...`` restricts the groups.
 
+Each number is kept with its path (the dict keys and list indices that lead to it); the two trees'
+numbers are compared path by path, an older tree's keys read under their names now where the library
+knows the old name (``impactbar.physical.outputs.renamed_key``: the outputs' ``RENAMED``, a key in
+another unit divided by the factor; the result attributes renamed by ``renamed_attribute``), so that
+a renamed key, which moves its number in the sorted order the sha is taken in, says "same (bitwise;
+keys renamed: a -> b)" where every number is the same.
+
 The groups: ``orbits`` (``periodic_orbits`` under a cosine and a square-wave load, the wave law;
 phases, impact velocities, multipliers), ``find_orbit`` (the valve drive, the oil circuit rigid and
 with 2 modes, the rod-rock law's orbit), ``simulate`` (a cosine-loaded run, a valve drifter's run, the
@@ -37,20 +44,23 @@ GROUPS = ("orbits", "find_orbit", "simulate", "continuation", "sweep", "si", "ex
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _flat(x):
-    """Numbers of a result as a flat list of floats (complex as two)."""
+def _flat(x, path=()):
+    """Numbers of a result as a flat list of ``(path, float)`` (complex as two, ``re`` and ``im``),
+    in the order of the sha (a dict's keys sorted); a path is the dict keys and list indices that
+    lead to the number."""
     if isinstance(x, dict):
-        return [v for k in sorted(x) for v in _flat(x[k])]
+        return [v for k in sorted(x)
+                for v in _flat(x[k], (*path, k if isinstance(k, (str, int)) else str(k)))]
     if isinstance(x, (list, tuple)):
-        return [v for e in x for v in _flat(e)]
+        return [v for i, e in enumerate(x) for v in _flat(e, (*path, i))]
     if isinstance(x, np.ndarray):
-        return _flat(x.tolist())
+        return _flat(x.tolist(), path)
     if isinstance(x, (bool, np.bool_)):
-        return [float(x)]
+        return [(path, float(x))]
     if isinstance(x, (int, float, np.integer, np.floating)):
-        return [float(x)]
+        return [(path, float(x))]
     if isinstance(x, (complex, np.complexfloating)):
-        return [float(x.real), float(x.imag)]
+        return [((*path, "re"), float(x.real)), ((*path, "im"), float(x.imag))]
     return []  # text (statuses, names) is not a number
 
 
@@ -171,7 +181,7 @@ def group_exact():
 
 
 def fingerprint(groups):
-    """``{group: (list of floats, seconds)}`` of the named groups."""
+    """``{group: (list of (path, float), seconds)}`` of the named groups."""
     import warnings
 
     out = {}
@@ -182,7 +192,7 @@ def fingerprint(groups):
             try:
                 numbers = _flat(globals()[f"group_{g}"]())
             except Exception as exc:  # noqa: BLE001 - reported as the group's outcome
-                numbers = [f"{type(exc).__name__}: {exc}"]
+                numbers = [((), f"{type(exc).__name__}: {exc}")]
         out[g] = (numbers, time.perf_counter() - t)
     return out
 
@@ -191,7 +201,69 @@ def _digest(numbers) -> str:
     return hashlib.sha256(json.dumps([repr(x) for x in numbers]).encode()).hexdigest()[:16]
 
 
-def _compare(a, b) -> str:
+def _renames():
+    """``key -> [(key now, factor)]``: the library's old names of its outputs and results
+    (``impactbar.physical.outputs.renamed_key``, the attributes ``renamed_attribute`` gave a new name;
+    a value stored under the old key divided by the factor is the new key's), as far as the library
+    has them; a function of the key."""
+    try:
+        from impactbar._shared.renamed import RENAMED_ATTRIBUTES
+        from impactbar.physical.outputs import renamed_key
+    except ImportError:  # (a library without them: no key is translated)
+        return lambda key: []
+
+    def candidates(key):
+        if not isinstance(key, str):
+            return []
+        out = []
+        new, factor = renamed_key(key)
+        if new != key:
+            out.append((new, factor))
+        out += [(n, 1.0) for n in RENAMED_ATTRIBUTES.get(key, ()) if n not in {c for c, _ in out}]
+        return out
+
+    return candidates
+
+
+def _translate(mine, theirs):
+    """``theirs`` (``(path, number)``) with each path that ``mine`` lacks under its names now: one
+    key of it replaced by a name now (:func:`_renames`) that gives a path of ``mine`` that ``theirs``
+    does not hold, its number divided by the factor; with the renames made (``"a -> b"``)."""
+    here = {tuple(p) for p, _ in mine}
+    there = {tuple(p) for p, _ in theirs}
+    candidates = _renames()
+    out, renamed = [], []
+    for path, x in theirs:
+        path = tuple(path)
+        if path not in here:
+            for i, key in enumerate(path):
+                hit = next(((new, f) for new, f in candidates(key)
+                            if (*path[:i], new, *path[i + 1:]) in here - there), None)
+                if hit is not None:
+                    new, f = hit
+                    path = (*path[:i], new, *path[i + 1:])
+                    x = x / f if f != 1.0 and isinstance(x, float) else x
+                    said = f"{key} -> {new}" + (f" (/{f:g})" if f != 1.0 else "")
+                    if said not in renamed:
+                        renamed.append(said)
+                    break
+        out.append((path, x))
+    return out, renamed
+
+
+def _compare(mine, theirs) -> str:
+    """"same (bitwise)" or where the largest relative difference is: number by number where both
+    sides name their numbers by the same paths (an older tree's keys under their names now,
+    :func:`_translate`), else in order."""
+    renamed = []
+    if theirs and theirs[0][0] is not None:  # (their numbers with paths: compared by path)
+        theirs, renamed = _translate(mine, theirs)
+        by_path = dict(theirs)
+        if len(by_path) == len(theirs) == len(mine) and all(tuple(p) in by_path for p, _ in mine):
+            theirs = [(p, by_path[tuple(p)]) for p, _ in mine]
+        else:
+            renamed = []
+    a, b = [x for _, x in mine], [x for _, x in theirs]
     if len(a) != len(b):
         return f"DIFFERENT COUNT {len(a)} vs {len(b)}"
     if any(isinstance(x, str) for x in (*a, *b)):
@@ -203,7 +275,20 @@ def _compare(a, b) -> str:
         rel = abs(x - y) / max(abs(x), abs(y), 1e-300)
         if rel > worst:
             worst, where = rel, i
-    return "same (bitwise)" if where < 0 else f"differs: largest relative {worst:.2e} at number {where}"
+    keys = f"; keys renamed: {', '.join(renamed)}" if renamed else ""
+    if where < 0:
+        return f"same (bitwise{keys})"
+    at = "/".join(str(k) for k in mine[where][0])
+    return f"differs: largest relative {worst:.2e} at number {where}" + (f" ({at}{keys})" if at else "")
+
+
+def _read_numbers(stored) -> list:
+    """A group's ``(path, number)`` as ``--out`` wrote them (the path ``None`` where a file of an
+    older script holds the numbers alone)."""
+    numbers = stored["numbers"] if isinstance(stored, dict) else stored
+    paths = stored["paths"] if isinstance(stored, dict) else [None] * len(numbers)
+    return [(None if p is None else tuple(p), float(x) if not x.startswith("'") else x)
+            for p, x in zip(paths, numbers, strict=True)]
 
 
 def _export(ref: str) -> Path:
@@ -248,8 +333,10 @@ def main(argv=None) -> int:
         if not Path(impactbar.__file__).resolve().is_relative_to(Path(expect).resolve()):
             raise SystemExit(f"imported {impactbar.__file__}, not the tree at {expect}")
     mine = fingerprint(args.only)
-    if args.out:
-        Path(args.out).write_text(json.dumps({g: [repr(x) for x in n] for g, (n, _) in mine.items()}))
+    if args.out:  # (each group's numbers as repr, and their paths)
+        Path(args.out).write_text(json.dumps({g: {"numbers": [repr(x) for _, x in n],
+                                                  "paths": [list(p) for p, _ in n]}
+                                              for g, (n, _) in mine.items()}))
     theirs = None
     if args.against:
         tree = _export(args.against)
@@ -258,10 +345,9 @@ def main(argv=None) -> int:
         env = dict(os.environ, PYTHONPATH=str(tree / "src"), FINGERPRINT_TREE=str(tree))
         subprocess.run([sys.executable, str(Path(__file__).resolve()), "--out", path, "--only", *args.only],
                        env=env, check=True, stdout=subprocess.DEVNULL)
-        theirs = {g: [float(x) if not x.startswith("'") else x for x in v]
-                  for g, v in json.loads(Path(path).read_text()).items()}
+        theirs = {g: _read_numbers(v) for g, v in json.loads(Path(path).read_text()).items()}
     for g, (numbers, secs) in mine.items():
-        line = f"{g:14s} {len(numbers):6d} numbers  {_digest(numbers)}  ({secs:.1f} s)"
+        line = f"{g:14s} {len(numbers):6d} numbers  {_digest([x for _, x in numbers])}  ({secs:.1f} s)"
         if theirs is not None:
             line += f"  against {args.against}: {_compare(numbers, theirs[g])}"
         print(line)

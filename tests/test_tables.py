@@ -122,14 +122,14 @@ def test_si_simulation_table_and_the_csv_written_through_it(tmp_path):
     res = physical.simulate(physical.preset("pneumatic-drill"), periods=4)
     df = res.to_dataframe()
     np.testing.assert_array_equal(df["time_s"], res.impact_times_s)
-    np.testing.assert_array_equal(df["blow_energy_J"], res.blow_energies_J)
+    np.testing.assert_array_equal(df["impact_energy_J"], res.impact_energies_J)
     # energy per blow m v^2 / 2, from the velocities
-    np.testing.assert_allclose(df["blow_energy_J"],
+    np.testing.assert_allclose(df["impact_energy_J"],
                                0.5 * res.hammer.mass_kg * df["impact_velocity_m_s"] ** 2, rtol=1e-12)
-    assert df.attrs["columns"]["blow_energy_J"]["units"] == "J"
+    assert df.attrs["columns"]["impact_energy_J"]["units"] == "J"
     write_impacts(res, tmp_path / "impacts.csv")
     lines = (tmp_path / "impacts.csv").read_text().splitlines()
-    assert lines[0] == "impact,time_s,impact_velocity_m_s,blow_energy_J"
+    assert lines[0] == "impact,time_s,impact_velocity_m_s,impact_energy_J"
     assert len(lines) == len(df) + 1
     first = lines[1].split(",")
     assert first[0] == "0" and float(first[1]) == pytest.approx(df["time_s"].iloc[0], rel=1e-8)

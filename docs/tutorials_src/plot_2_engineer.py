@@ -102,7 +102,7 @@ for o in physical.orbits(hammer_m):
 # impact by impact (theory §8). The blows settle on the stable periodic motion found above.
 res = physical.simulate(hammer, periods=30)
 fig, ax = plt.subplots(figsize=(7, 3.2))
-ax.plot(res.impact_times_s * 1e3, res.blow_energies_J, "o-", ms=3, lw=0.6)
+ax.plot(res.impact_times_s * 1e3, res.impact_energies_J, "o-", ms=3, lw=0.6)
 stable_E = [o.impact_energy_J for o in found if o.stable]
 for e in stable_E:
     ax.axhline(e, color="tab:red", ls="--", label="stable periodic motion")

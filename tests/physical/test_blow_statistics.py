@@ -40,10 +40,10 @@ def test_statistics_over_blows_only_chatter_apart():
     assert s.n_blows_second_half == np.count_nonzero(tb >= 0.5)
     assert s.n_chatter_second_half == 2 * s.n_blows_second_half
     assert s.mean_impact_velocity_m_s == pytest.approx(30.0)
-    assert s.mean_blow_energy_J == pytest.approx(0.5 * h.mass_kg * 900.0)
+    assert s.mean_impact_energy_J == pytest.approx(0.5 * h.mass_kg * 900.0)
     assert s.mean_blow_interval_s == pytest.approx(0.05)
     assert s.blow_interval_std_s == pytest.approx(0.0, abs=1e-12)
-    assert s.mean_power_W == pytest.approx(0.5 * h.mass_kg * 900.0 / 0.05)
+    assert s.mean_impact_power_kW == pytest.approx(0.5 * h.mass_kg * 900.0 / 0.05 / 1e3)
     assert s.settled and s.blows_per_cycle == 1 and "one blow per cycle" in s.message
     assert np.isnan(s.mean_efficiency)  # no rod wave in this record
     d = s.to_dict()

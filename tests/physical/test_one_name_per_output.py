@@ -263,6 +263,9 @@ def test_a_name_two_results_share_is_one_outputs_key():
     ("OptimalPiston", "peak_stress_Pa", "peak_rod_stress_Pa"),
     ("OptimalPiston", "uniform_peak_stress_Pa", "uniform_peak_rod_stress_Pa"),
     ("PhysicalOrbit", "peak_stress_Pa", "peak_piston_stress_Pa"),
+    ("PhysicalOrbit", "blow_energy_J", "impact_energy_J"),
+    ("SimulationResult", "blow_energies_J", "impact_energies_J"),
+    ("BlowStatistics", "mean_blow_energy_J", "mean_impact_energy_J"),
 ])
 def test_a_results_old_attribute_reads_the_new_one_with_a_deprecation_warning(cls, old, new):
     import impactbar.physical as ph
@@ -304,3 +307,87 @@ def test_the_hammers_orbit_names_what_it_shares_with_a_drifters_as_the_registry_
         assert o.blow_energy_J == o.impact_energy_J
     with pytest.warns(DeprecationWarning, match="power_W is now called impact_power_kW"):
         assert o.power_W == o.impact_energy_J * o.blow_frequency_Hz
+
+
+#: the prefixes of a figure over a run's blows: ``mean_impact_energy_J`` is the mean of
+#: ``impact_energy_J``, ``last_impact_energy_J`` its last blow's
+_OVER_BLOWS = ("mean_", "last_")
+
+
+def _run_views() -> tuple[dict, float, float]:
+    """A simulated run's views of its numbers, ``{view: {name: (value, long name or None)}}`` (its
+    table, :meth:`~impactbar.physical.SimulationResult.to_dataframe`; its blow statistics; the CLI's
+    ``summary.json``), of a stand-in run of the pneumatic drill: 20 blows of 30 m/s, one every 50 ms;
+    and the closed forms of its kinetic energy at impact (J) and its impact power (kW), the energy
+    :math:`m v^2/2` over the interval. The run is built by position: its fields' names are what is
+    tested."""
+    import numpy as np
+
+    from impactbar import physical as ph
+    from impactbar.cli.simulate import summarize
+
+    h = ph.preset("pneumatic-drill")
+    t = 0.05 * np.arange(1, 21)
+    v = np.full(t.size, 30.0)
+    run = ph.SimulationResult(h, None, 1.0, t, v, 0.5 * h.mass_kg * v * v)
+    df = run.to_dataframe()
+    columns = df.attrs["columns"]
+    views = {"run table": {c: (float(df[c].iloc[-1]), columns[c]["long_name"]) for c in df.columns},
+             "blow statistics": {k: (x, None) for k, x in run.blow_statistics().to_dict().items()},
+             "summary.json": {k: (x, None) for k, x in summarize(run).items()}}
+    energy = 0.5 * h.mass_kg * 900.0
+    return views, energy, energy / 0.05 / 1e3
+
+
+def test_a_runs_views_name_its_impact_energy_and_power_by_the_registrys_keys():
+    """A simulated run's table, blow statistics and CLI summary give its kinetic energy at impact and
+    its impact power (the closed forms of a run of equal blows) under the registry's keys
+    (``impact_energy_J``, ``impact_power_kW``: in kW, not W; a mean or the last blow's with its
+    prefix) and long names: they said ``blow_energy_J``, ``mean_blow_energy_J`` and ``mean_power_W``.
+    Found by value, not by name: every number of each view that is one of the closed forms (the
+    power in W or kW) is checked."""
+    import math
+
+    views, energy, power_kW = _run_views()
+    targets = {"impact_energy": (energy,), "impact_power": (power_kW, 1e3 * power_kW)}
+    found, wrong = set(), []
+    for view, figures in views.items():
+        for name, (value, long_name) in figures.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                continue
+            for output, values in targets.items():
+                if not any(value == pytest.approx(x, rel=1e-12) for x in values):
+                    continue
+                o = OUTPUTS[output]
+                stem = next((name[len(p):] for p in _OVER_BLOWS if name.startswith(p)), name)
+                found.add((view, output))
+                if stem != o.key or value != pytest.approx(values[0], rel=1e-12):
+                    wrong.append(f"{view}: {name} = {value!r} is the {output} ({o.key}, {o.unit})")
+                elif long_name is not None and long_name != o.long_name:
+                    wrong.append(f"{view}: {name} is {long_name!r}, the registry's {o.long_name!r}")
+    assert {(v, "impact_energy") for v in views} <= found  # (the walk sees each view's energy)
+    assert {("blow statistics", "impact_power"), ("summary.json", "impact_power")} <= found
+    assert not wrong, "one quantity under two names:\n" + "\n".join(wrong)
+
+
+def test_a_runs_old_power_reads_the_impact_power_in_watts():
+    """``BlowStatistics.mean_power_W`` (W) reads ``mean_impact_power_kW`` times 1000 with a
+    ``DeprecationWarning``; the old keys of the registry's outputs map to the keys now with the
+    factor between their units (:func:`~impactbar.physical.outputs.renamed_key`)."""
+    import numpy as np
+
+    from impactbar import physical as ph
+    from impactbar.physical.outputs import renamed_key
+
+    h = ph.preset("pneumatic-drill")
+    t = 0.05 * np.arange(1, 21)
+    v = np.full(t.size, 30.0)
+    stats = ph.SimulationResult(h, None, 1.0, t, v, 0.5 * h.mass_kg * v * v).blow_statistics()
+    with pytest.warns(DeprecationWarning, match="mean_power_W is now called mean_impact_power_kW"):
+        watts = stats.mean_power_W
+    assert watts == pytest.approx(0.5 * h.mass_kg * 900.0 / 0.05, rel=1e-14)
+    assert watts / 1e3 == pytest.approx(stats.mean_impact_power_kW, rel=1e-15)
+    assert renamed_key("power_W") == ("impact_power_kW", 1e3)
+    assert renamed_key("blow_energy_J") == ("impact_energy_J", 1.0)
+    assert renamed_key("min_percussive_power_kW") == ("min_impact_power_kW", 1.0)
+    assert renamed_key("pump_power_kW") == ("pump_power_kW", 1.0)  # (the name now: as it is)

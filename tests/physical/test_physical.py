@@ -554,11 +554,11 @@ def test_cli_simulate_outputs(tmp_path, monkeypatch):
     v = 0.2 * h.scales.velocity_m_s
     assert summary["n_impacts"] == 5
     assert summary["last_impact_velocity_m_s"] == pytest.approx(v)
-    assert summary["mean_blow_energy_J"] == pytest.approx(0.5 * h.mass_kg * v * v)
+    assert summary["mean_impact_energy_J"] == pytest.approx(0.5 * h.mass_kg * v * v)
     assert summary["mean_blow_interval_s"] == pytest.approx(1 / 40)
-    assert summary["mean_power_W"] == pytest.approx(0.5 * h.mass_kg * v * v * 40)
+    assert summary["mean_impact_power_kW"] == pytest.approx(0.5 * h.mass_kg * v * v * 40 / 1e3)
     rows = (out / "impacts.csv").read_text().splitlines()
-    assert rows[0] == "impact,time_s,impact_velocity_m_s,blow_energy_J" and len(rows) == 6
+    assert rows[0] == "impact,time_s,impact_velocity_m_s,impact_energy_J" and len(rows) == 6
 
 
 def test_cli_simulate_bad_gap(tmp_path):

@@ -17,6 +17,12 @@ RENAMED = {
 }
 
 
+#: each old attribute of a result, to the attributes now that :func:`renamed_attribute` gave it, as
+#: the result types' modules declare them (one old name may have been two types' quantities:
+#: ``peak_stress_Pa`` is ``PhysicalOrbit.peak_piston_stress_Pa`` and ``OptimalPiston.peak_rod_stress_Pa``)
+RENAMED_ATTRIBUTES: dict[str, list[str]] = {}
+
+
 def renamed(module, name: str):
     """The value of the renamed public ``name`` in ``module`` (its new name's), with a
     :class:`DeprecationWarning`; ``None`` where ``name`` was never renamed.
@@ -42,7 +48,8 @@ def renamed(module, name: str):
 
 def renamed_attribute(old: str, new: str, value=None) -> property:
     """A result's attribute under the name it had before: a read-only property that gives the
-    attribute ``new`` (or ``value(obj)``) with a :class:`DeprecationWarning` naming it.
+    attribute ``new`` (or ``value(obj)``) with a :class:`DeprecationWarning` naming it; the rename
+    is recorded in :data:`RENAMED_ATTRIBUTES`.
 
     Parameters
     ----------
@@ -68,6 +75,10 @@ def renamed_attribute(old: str, new: str, value=None) -> property:
     ...     Result().blow_energy_J, str(caught[0].message)
     (2.5, 'blow_energy_J is now called impact_energy_J')
     """
+
+    targets = RENAMED_ATTRIBUTES.setdefault(old, [])
+    if new not in targets:
+        targets.append(new)
 
     def get(obj):
         warnings.warn(f"{old} is now called {new}", DeprecationWarning, stacklevel=2)

@@ -76,11 +76,11 @@ def run(args) -> int:
     if summary["n_blows_second_half"] >= 2:
         line += (f"; second half, {summary['n_blows_second_half']} blows: "
                  f"{summary['mean_impact_velocity_m_s']:.3f} m/s, "
-                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
+                 f"{summary['mean_impact_energy_J']:.2f} J per blow, every "
                  f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
                  f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms; "
                  f"{summary['blow_frequency_Hz']:.4g} Hz), "
-                 f"{summary['mean_power_W']:.4g} W")
+                 f"{summary['mean_impact_power_kW']:.4g} kW")
         if np.isfinite(summary["mean_efficiency"]):
             line += f", efficiency {summary['mean_efficiency']:.3f}"
     print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
@@ -149,12 +149,12 @@ def summarize(result: physical.SimulationResult, *, blow_fraction: float = 0.25)
     """
     t = result.impact_times_s
     v = result.impact_velocities_m_s
-    e = result.blow_energies_J
+    e = result.impact_energies_J
     out = result.hammer.to_dict()
     out["drive_blow_frequency_Hz"] = out.pop("blow_frequency_Hz")  # f / k, imposed by the drive
     out.update({"t_end_s": result.t_end_s, "n_impacts": int(t.size)})
     if t.size:
-        out.update({"last_impact_velocity_m_s": float(v[-1]), "last_blow_energy_J": float(e[-1])})
+        out.update({"last_impact_velocity_m_s": float(v[-1]), "last_impact_energy_J": float(e[-1])})
     stats = result.blow_statistics(blow_fraction=blow_fraction)
     out.update(stats.to_dict())
     out["blow_frequency_Hz"] = 1.0 / stats.mean_blow_interval_s  # measured; NaN below two blows

@@ -45,7 +45,8 @@ from ..orbits.orbit import ORBIT_FIELDS
 from .display_units import display_unit
 
 __all__ = ["Output", "OUTPUTS", "RENAMED", "register_output", "unregister_output", "outputs",
-           "added_outputs", "Reading", "output_values", "output_by_key", "current_name", "current_keys"]
+           "added_outputs", "Reading", "output_values", "output_by_key", "current_name", "current_keys",
+           "renamed_key"]
 
 #: The unit an output's value comes in that is not SI, to the SI unit a store holds and the factor
 #: (the value times it).
@@ -393,10 +394,12 @@ _BUILTIN = frozenset(OUTPUTS)
 #: ideal blow's) for the blow's ``efficiency``; the valve drifter's summaries said ``percussive_power``
 #: for ``impact_power`` (the kinetic energy at impact times the blow frequency, both machines'); the
 #: optimiser's constraint ``min_pressure`` limited ``minimum_pressure`` (the least pressure of the oil),
-#: a constraint now named by it.
+#: a constraint now named by it; the hammer's one-impact orbit and its simulation said ``blow_energy``
+#: for ``impact_energy`` (``blow_energy_J``, ``mean_blow_energy_J``) and ``power`` for
+#: ``impact_power`` (``power_W`` and ``mean_power_W``, in W: :func:`renamed_key`).
 RENAMED = {"peak_incident_stress": "peak_rod_stress", "rock_efficiency": "efficiency",
            "blow_efficiency": "efficiency", "percussive_power": "impact_power",
-           "min_pressure": "minimum_pressure"}
+           "min_pressure": "minimum_pressure", "blow_energy": "impact_energy", "power": "impact_power"}
 
 
 def current_name(name: str, what: str = "output") -> str:
@@ -469,6 +472,40 @@ def _old_keys() -> dict:
 
 
 _OLD_KEYS = _old_keys()
+
+
+def renamed_key(key: str) -> tuple[str, float]:
+    """The key now of a value stored under an old name (:data:`RENAMED`), and the factor its value
+    is divided by: an old name or key of :func:`current_name` (factor 1), or an old name with the SI
+    unit where the output's key has another (``power_W``, in W, is ``impact_power_kW``: 1000). No
+    warning: for tools that compare a record of an older version with one of this (source:
+    docs/developers.md, one name per output).
+
+    Parameters
+    ----------
+    key : str
+        A key as an older version stored it.
+
+    Returns
+    -------
+    tuple of (str, float)
+        The key now and the factor (``key`` itself and 1.0 where it is not an old one).
+
+    Examples
+    --------
+    >>> from impactbar.physical.outputs import renamed_key
+    >>> renamed_key("blow_energy_J"), renamed_key("power_W"), renamed_key("stable")
+    (('impact_energy_J', 1.0), ('impact_power_kW', 1000.0), ('stable', 1.0))
+    """
+    stem = _old_stem(key)
+    if stem is not None:
+        return key[:len(key) - len(stem)] + _OLD_KEYS[stem], 1.0
+    for old, new in RENAMED.items():
+        o = OUTPUTS[new]
+        si_unit, factor = _TO_SI.get(o.unit, (o.unit, 1.0))
+        if factor != 1.0 and key == _named(old, si_unit):
+            return o.key, factor
+    return key, 1.0
 
 
 def _old_stem(name) -> str | None:

@@ -301,12 +301,15 @@ class BlowStatistics:
         The same over the second half.
     mean_impact_velocity_m_s, impact_velocity_std_m_s : float
         Mean and standard deviation of the blows' impact velocities (m/s).
-    mean_blow_energy_J : float
-        Mean energy per blow :math:`m v^2 / 2` (J).
+    mean_impact_energy_J : float
+        Mean kinetic energy at impact per blow :math:`m v^2 / 2` (J; the output ``impact_energy``;
+        ``mean_blow_energy_J`` the name it had: a ``DeprecationWarning``).
     mean_blow_interval_s, blow_interval_std_s : float
         Mean and standard deviation of the time between blows (s).
-    mean_power_W : float
-        Blow energy per unit time over the blows of the second half (W).
+    mean_impact_power_kW : float
+        Impact power: the blows' kinetic energy at impact per unit time over the blows of the second
+        half (kW; the output ``impact_power``). ``mean_power_W``, the name it had, gives it in W (a
+        ``DeprecationWarning``).
     mean_rod_energy_J, mean_peak_rod_stress_Pa, mean_efficiency : float
         Wave law only: the blows' mean rod energy (J), peak rod stress (Pa) and transfer efficiency
         (each <= 1, see :class:`PhysicalOrbit`).
@@ -325,15 +328,19 @@ class BlowStatistics:
     n_chatter_second_half: int
     mean_impact_velocity_m_s: float
     impact_velocity_std_m_s: float
-    mean_blow_energy_J: float
+    mean_impact_energy_J: float
     mean_blow_interval_s: float
     blow_interval_std_s: float
-    mean_power_W: float
+    mean_impact_power_kW: float
     mean_rod_energy_J: float
     mean_peak_rod_stress_Pa: float
     mean_efficiency: float
     blows_per_cycle: int
     message: str
+
+    mean_blow_energy_J = renamed_attribute("mean_blow_energy_J", "mean_impact_energy_J")
+    mean_power_W = renamed_attribute("mean_power_W", "mean_impact_power_kW",
+                                     lambda s: s.mean_impact_power_kW * 1e3)  # (W, as it was)
 
     @property
     def settled(self) -> bool:
@@ -434,8 +441,9 @@ class SimulationResult:
         Impact times (s).
     impact_velocities_m_s : numpy.ndarray, shape (n,)
         Arrival velocities of the struck end (m/s).
-    blow_energies_J : numpy.ndarray, shape (n,)
-        :math:`m v^2 / 2` per impact (J).
+    impact_energies_J : numpy.ndarray, shape (n,)
+        The kinetic energy at impact :math:`m v^2 / 2` of each impact (J; the output
+        ``impact_energy``; ``blow_energies_J`` the name it had: a ``DeprecationWarning``).
     rod_energies_J, peak_rod_stresses_Pa, efficiencies : numpy.ndarray, shape (n,)
         Under the wave law (theory §4b) the energy and the peak stress of the wave each blow sends
         into the rod, and the transfer efficiency (see :class:`PhysicalOrbit`); NaN under eq. 10.
@@ -453,10 +461,12 @@ class SimulationResult:
     t_end_s: float
     impact_times_s: np.ndarray
     impact_velocities_m_s: np.ndarray
-    blow_energies_J: np.ndarray
+    impact_energies_J: np.ndarray
     rod_energies_J: np.ndarray = None
     peak_rod_stresses_Pa: np.ndarray = None
     efficiencies: np.ndarray = None
+
+    blow_energies_J = renamed_attribute("blow_energies_J", "impact_energies_J")
 
     def force_wave(self, i: int, t_s) -> np.ndarray:
         """Force (N) of the wave sent into the rod by impact ``i`` (wave law), at times ``t_s`` (s)
@@ -532,15 +542,15 @@ class SimulationResult:
                  "n_chatter": int(t.size - np.count_nonzero(blow)),
                  "n_blows_second_half": int(np.count_nonzero(late)),
                  "n_chatter_second_half": int(np.count_nonzero(~blow & (t >= 0.5 * self.t_end_s)))}
-        tl, vl, el = t[late], self.impact_velocities_m_s[late], self.blow_energies_J[late]
+        tl, vl, el = t[late], self.impact_velocities_m_s[late], self.impact_energies_J[late]
         if tl.size >= 2:
             dt = np.diff(tl)
             stats.update(mean_blow_interval_s=float(np.mean(dt)), blow_interval_std_s=float(np.std(dt)),
-                         mean_power_W=float(np.sum(el[1:]) / (tl[-1] - tl[0])))
+                         mean_impact_power_kW=float(np.sum(el[1:]) / (tl[-1] - tl[0])) / 1e3)
         if tl.size:
             stats.update(mean_impact_velocity_m_s=float(np.mean(vl)),
                          impact_velocity_std_m_s=float(np.std(vl)),
-                         mean_blow_energy_J=float(np.mean(el)))
+                         mean_impact_energy_J=float(np.mean(el)))
         rod = self.rod_energies_J
         if tl.size and rod is not None and np.all(np.isfinite(rod[late])):  # the wave law
             stats.update(mean_rod_energy_J=float(np.mean(rod[late])),
@@ -572,15 +582,17 @@ class SimulationResult:
         -------
         pandas.DataFrame
             Index ``impact`` (0, 1, ...), columns ``time_s`` (s), ``impact_velocity_m_s`` (m/s) and
-            ``blow_energy_J`` (J), and under the wave law ``rod_energy_J`` (J),
+            ``impact_energy_J`` (J; the output ``impact_energy``, its key and long name the
+            registry's, :mod:`~impactbar.physical.outputs`), and under the wave law ``rod_energy_J`` (J),
             ``peak_rod_stress_Pa`` (Pa) and ``efficiency``; ``attrs`` holds the hammer's name,
             ``t_end_s`` and each column's ``long_name`` and ``units``.
         """
+        energy = OUTPUTS["impact_energy"]
         cols = {"impact": np.arange(self.impact_times_s.size), "time_s": self.impact_times_s,
-                "impact_velocity_m_s": self.impact_velocities_m_s, "blow_energy_J": self.blow_energies_J}
+                "impact_velocity_m_s": self.impact_velocities_m_s, energy.key: self.impact_energies_J}
         meta = {"impact": ("impact number", "1"), "time_s": ("time of the impact", "s"),
                 "impact_velocity_m_s": ("arrival velocity of the struck end", "m/s"),
-                "blow_energy_J": ("energy per blow m v^2 / 2", "J")}
+                energy.key: (energy.long_name, energy.unit)}
         if self.rod_energies_J is not None and np.any(np.isfinite(self.rod_energies_J)):  # wave law
             cols.update(rod_energy_J=self.rod_energies_J, peak_rod_stress_Pa=self.peak_rod_stresses_Pa,
                         efficiency=self.efficiencies)
@@ -681,7 +693,7 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
     return SimulationResult(
         hammer=hammer, trajectory=traj, t_end_s=t_end * sc.time_s,
         impact_times_s=np.asarray(traj.impact_times, dtype=float) * sc.time_s,
-        impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v,
+        impact_velocities_m_s=v, impact_energies_J=0.5 * hammer.mass_kg * v * v,
         rod_energies_J=rod, peak_rod_stresses_Pa=stress, efficiencies=eff)
 
 

@@ -142,7 +142,7 @@ def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolera
     while True:
         t, v, end = settle_run(machine, blows, blow_fraction, rate_hz=rate)
         res = SimulationResult(hammer=None, trajectory=None, t_end_s=end, impact_times_s=t,
-                               impact_velocities_m_s=v, blow_energies_J=0.5 * machine.bar.mass_kg * v * v)
+                               impact_velocities_m_s=v, impact_energies_J=0.5 * machine.bar.mass_kg * v * v)
         stats = res.blow_statistics(blow_fraction=blow_fraction, settle_tolerance=settle_tolerance)
         if stats.settled or blows >= most:
             break

@@ -56,7 +56,7 @@ def plot_blows(result, ax=None, blow_fraction: float = 0.25):
 
         _, ax = plt.subplots()
     blow = result.is_blow(blow_fraction)
-    t, e = result.impact_times_s, result.blow_energies_J
+    t, e = result.impact_times_s, result.impact_energies_J
     ax.plot(t[blow], e[blow], "o-", ms=3, lw=0.6, label="blows")
     if not np.all(blow):
         ax.plot(t[~blow], e[~blow], "o", ms=3, mfc="none", label="chatter")
