@@ -180,10 +180,12 @@ def _thin_direction(starts, pieces, thin, ends, dp0):
     if j.size == 0:
         return drv
     i = np.searchsorted(thin, j) - 1  # (their thinned piece)
-    c = np.stack([drv[1][p][2] for p in range(1, thin.size - 1)])  # (pieces, K, 4)
+    _, drv_pieces = drv
+    c = np.stack([cp for _, _, cp in drv_pieces[1:-1]])  # (pieces, K, 4): the cubics
     s = (starts[j] - starts[thin[i]])[:, None]
-    ci = c[i - 1].real
-    val = ((ci[..., 3] * s + ci[..., 2]) * s + ci[..., 1]) * s + ci[..., 0]
+    val = np.zeros((j.size, c.shape[1]))
+    for cm in np.moveaxis(c[i - 1].real, -1, 0)[::-1]:  # (Horner's, the highest power first)
+        val = val * s + cm
     bad = np.unique(i[np.any(np.abs(val - ya[j]) > THIN_TOL * size, axis=1)])
     if bad.size == 0:
         return drv

@@ -126,13 +126,14 @@ def _bound(pieces, reach, spans=False):
         reach = np.maximum(reach, 1.0)
     # (the pieces of one shape and degrees at once: a drive's thousands of cubics in one product)
     groups: dict = {}
-    for j, (_, d, c) in enumerate(pieces):
-        groups.setdefault((c.shape, np.asarray(d).tobytes()), []).append(j)
+    for (_, d, c), r in zip(pieces, reach, strict=True):
+        _, rs, cs = groups.setdefault((c.shape, np.asarray(d).tobytes()), (np.asarray(d), [], []))
+        rs.append(r)
+        cs.append(c)
     out = None
-    for idx in groups.values():
-        d = np.asarray(pieces[idx[0]][1])
-        C = np.stack([pieces[j][2] for j in idx])
-        r = reach[idx].reshape((-1,) + (1,) * (C.ndim - 1))
+    for d, rs, cs in groups.values():
+        C = np.stack(cs)
+        r = np.asarray(rs).reshape((-1,) + (1,) * (C.ndim - 1))
         most = np.max(np.sum(np.abs(C) * r ** d, axis=-1), axis=0)
         out = most if out is None else np.maximum(out, most)
     return out
