@@ -121,8 +121,22 @@ def _bound(pieces, reach, spans=False):
     (a drive's pieces, ``reach`` their spans) ``sum |c| L^d``, the sup over a piece's span, as the
     primal's drive takes it (a short piece's monomials' coefficients are large, up to 1e18 on the
     integrator's 6e-9 steps, and must not set the direction's size)."""
-    return np.max([np.sum(np.abs(c) * (r if spans else max(r, 1.0)) ** d, axis=-1)
-                   for (_, d, c), r in zip(pieces, reach, strict=True)], axis=0)
+    reach = np.asarray(reach, dtype=float)
+    if not spans:
+        reach = np.maximum(reach, 1.0)
+    # (the pieces of one shape and degrees at once: a drive's thousands of cubics in one product)
+    groups: dict = {}
+    for (_, d, c), r in zip(pieces, reach, strict=True):
+        _, rs, cs = groups.setdefault((c.shape, np.asarray(d).tobytes()), (np.asarray(d), [], []))
+        rs.append(r)
+        cs.append(c)
+    out = None
+    for d, rs, cs in groups.values():
+        C = np.stack(cs)
+        r = np.asarray(rs).reshape((-1,) + (1,) * (C.ndim - 1))
+        most = np.max(np.sum(np.abs(C) * r ** d, axis=-1), axis=0)
+        out = most if out is None else np.maximum(out, most)
+    return out
 
 
 def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=False, arriving=None):
