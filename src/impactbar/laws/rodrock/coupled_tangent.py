@@ -140,7 +140,7 @@ def coupled_blow_tangent(model, drive, res, after, state, settings=None):
         return None
     G = np.zeros((n, n))
     G[:, cols] = now.T
-    G[2 * M:] = _impact_jacobian(drive, res, after) @ G[2 * M:]
+    G[2 * M:] = _impact_jacobian(drive, res) @ G[2 * M:]
     return G
 
 
@@ -183,9 +183,7 @@ def _thin_direction(starts, pieces, thin, ends, dp0):
     _, drv_pieces = drv
     c = np.stack([cp for _, _, cp in drv_pieces[1:-1]])  # (pieces, K, 4): the cubics
     s = (starts[j] - starts[thin[i]])[:, None]
-    val = np.zeros((j.size, c.shape[1]))
-    for cm in np.moveaxis(c[i - 1].real, -1, 0)[::-1]:  # (Horner's, the highest power first)
-        val = val * s + cm
+    val = np.polynomial.polynomial.polyval(s, np.moveaxis(c[i - 1].real, -1, 0), tensor=False)
     bad = np.unique(i[np.any(np.abs(val - ya[j]) > THIN_TOL * size, axis=1)])
     if bad.size == 0:
         return drv
@@ -217,7 +215,7 @@ def _hermite_direction(starts, pieces, ends, dp0):
     return starts, [(exps, degs, c) for (exps, degs, _), c in zip(pieces, coefs, strict=True)]
 
 
-def _impact_jacobian(drive, res, after):
+def _impact_jacobian(drive, res):
     """The Jacobian of the drive's map at the blow's end in its state ``z`` (central differences of
     the map alone: it writes values or keeps them, so that they are exact away from a switch)."""
     end = res.drive_state
