@@ -230,7 +230,7 @@ def _translate(mine, theirs):
     key of it replaced by a name now (:func:`_renames`) that gives a path of ``mine`` that ``theirs``
     does not hold, its number divided by the factor; with the renames made (``"a -> b"``)."""
     here = {tuple(p) for p, _ in mine}
-    there = {tuple(p) for p, _ in theirs}
+    only_here = here - {tuple(p) for p, _ in theirs}  # (the paths a rename may lead to)
     candidates = _renames()
     out, renamed = [], []
     for path, x in theirs:
@@ -238,7 +238,7 @@ def _translate(mine, theirs):
         if path not in here:
             for i, key in enumerate(path):
                 hit = next(((new, f) for new, f in candidates(key)
-                            if (*path[:i], new, *path[i + 1:]) in here - there), None)
+                            if (*path[:i], new, *path[i + 1:]) in only_here), None)
                 if hit is not None:
                     new, f = hit
                     path = (*path[:i], new, *path[i + 1:])
