@@ -190,11 +190,9 @@ def _has_node(cls) -> bool:
     return isinstance(inspect.getattr_static(cls, "nodes"), property)
 
 
-def split_key(key) -> tuple[str, str] | None:
-    """``(name, field)`` of a key ``parts.<name>.<field>``; ``None`` for a key of another form."""
-    head, _, rest = key.partition(".") if isinstance(key, str) else ("", "", "")
-    name, dot, field = rest.partition(".")
-    return (name, field) if head == "parts" and dot and name and field and "." not in field else None
+#: ``(name, field)`` of a key ``parts.<name>.<field>``; ``None`` for a key of another form (the
+#: tree's :func:`~impactbar.physical.tree.part_key`)
+split_key = tree.part_key
 
 
 def part_field(parts, key: str) -> tree.Field | None:

@@ -41,7 +41,8 @@ from dataclasses import dataclass
 __all__ = ["Field", "FIELDS", "MACHINES", "SCALES", "field", "fields", "declared", "read_si",
            "config_sections", "section_keys", "required_keys", "integer_keys", "continuable_keys",
            "real_keys", "in_sections", "typical_ranges", "continued", "refuse_continuation",
-           "markdown_table", "SCALE_STEPS", "convert", "convert_back", "has", "drive_values"]
+           "markdown_table", "SCALE_STEPS", "convert", "convert_back", "has", "drive_values",
+           "part_key", "is_config_key"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
@@ -424,6 +425,36 @@ def declared(key: str, kind: str = "circuit") -> Field | None:
     if len(parts) == 4 and parts[:2] == ["rod", "segments"] and parts[2].isdigit():
         key = f"rod.segments.{parts[3]}"
     return MACHINES.get(kind, {}).get(key)
+
+
+def part_key(key) -> tuple[str, str] | None:
+    """``(name, field)`` of a config's own part's key ``parts.<name>.<field>`` (the field declared
+    by the part's kind, :mod:`~impactbar.physical.circuit_parts`); ``None`` for a key of another
+    form.
+
+    Examples
+    --------
+    >>> part_key("parts.damper.volume"), part_key("supply.pump_flow")
+    (('damper', 'volume'), None)
+    """
+    head, _, rest = key.partition(".") if isinstance(key, str) else ("", "", "")
+    name, dot, field = rest.partition(".")
+    return (name, field) if head == "parts" and dot and name and field and "." not in field else None
+
+
+def is_config_key(key) -> bool:
+    """Whether ``key`` is a dotted SI config key: one that a kind of machine declares
+    (:func:`declared`, a rod segment's by its index too), or a field of a config's own part
+    (:func:`part_key`), rather than a dimensionless parameter's name (``delay``, ``precharge``).
+
+    Examples
+    --------
+    >>> is_config_key("supply.pump_flow"), is_config_key("valve.delay"), is_config_key("parts.damper.volume")
+    (True, True, True)
+    >>> is_config_key("precharge"), is_config_key("supply.pumpflow")
+    (False, False)
+    """
+    return part_key(key) is not None or any(declared(key, kind) is not None for kind in MACHINES)
 
 
 def read_si(key: str, value, kind: str = "circuit", name: str | None = None) -> float:
