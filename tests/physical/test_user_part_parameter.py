@@ -99,7 +99,8 @@ def test_it_is_continued_from_the_command_line(config_file, tmp_path):
     assert main(["continue", str(config_file), "--parameter", KEY, "--to", "0.6", "--max-points", "3",
                  "--out", str(out)]) == 0
     rows = (out / "branch.csv").read_text().splitlines()
-    assert rows[0].startswith(f"{KEY},parameter,")  # (a bare number: no unit in the header)
+    # (a bare number: no unit in the header)
+    assert rows[0].startswith(f"{KEY},") and "period_dimensionless" in rows[0]
     assert float(rows[1].split(",")[0]) == pytest.approx(0.5, rel=1e-12)
 
 

@@ -16,6 +16,9 @@ The views (names used across the package):
     one column per field in a table of results (``to_dataframe``, ``to_xarray``);
 ``"branch"``
     the orbit's columns along a branch of orbits (``Branch.to_dataframe``, ``to_xarray``);
+``"drifter_branch"``
+    a column of a drifter's ``branch.csv`` (``impactbar continue``,
+    :mod:`impactbar.physical.branch_table`);
 ``"sweep"``
     one variable per field in a sweep's store (per orbit);
 ``"si"``

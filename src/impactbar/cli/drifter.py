@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import physical
+from ..physical import tree
 from ..physical.circuit_graph import part_lines
 from ..physical.config import config_kind, read_toml
 from ..physical.display_units import format_key
 from ..physical.outputs import OUTPUTS
-from ..physical.tree import FIELDS
 from ..physical.units import to_si
 from ._common import json_ready, print_json, require
 
@@ -382,22 +382,6 @@ def _drifter_figures(drifter: physical.Drifter, run, out: Path) -> str:
     return written
 
 
-def _branch_outputs() -> list:
-    """What branch.csv adds for a drifter with its oil circuit: the outputs of the view ``"branch"``
-    (:mod:`~impactbar.physical.outputs`), each in its display unit."""
-    from ..physical.outputs import outputs
-
-    return outputs("branch", "circuit", rock=False)
-
-
-def _circuit_outputs(point, columns) -> tuple:
-    """The values of the ``columns`` (outputs) at one point of a circuit's branch, in display units."""
-    from ..physical.outputs import output_values
-
-    values = output_values(point, columns)
-    return tuple(o.shown(values[o.name]) for o in columns)
-
-
 def _user_unit(field, to):
     """The unit the user gave ``--to`` in (``"L/min"`` for ``"100 L/min"``), else the SI unit of the
     key's declaration ``field``, and the conversion of an SI value into it (the unit read as every
@@ -414,14 +398,17 @@ def _user_unit(field, to):
 def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     """``impactbar continue --preset drifter-... --parameter delay --to X``: the drifter's orbit
     continued in a dimensionless parameter (theory §10), or an oil circuit's in a config key in SI;
-    writes ``branch.csv`` (parameter, period, impact velocity, largest |multiplier|, stable; a config
-    key's value first, in the unit ``--to`` was given in; for a circuit then
-    the outputs of the view ``"branch"`` in display units) and ``events.csv``."""
+    writes ``branch.csv`` and ``events.csv``, every column from a declaration
+    (:mod:`~impactbar.physical.branch_table`: a config key's value first, in the unit ``--to`` was
+    given in; the dimensionless parameter and orbit; for a circuit the outputs of the view
+    ``"branch"`` in display units)."""
     from ..continuation import continue_orbit
+    from ..physical.branch_table import branch_outputs, branch_rows, event_rows
 
     name, to = args.parameter, args.to
-    si = name in FIELDS or name.startswith("parts.")  # a config key in SI: supply.pump_flow, a part's, ...
-    if si and not isinstance(drifter, physical.CircuitDrifter):
+    si = tree.is_config_key(name)  # a config key in SI: supply.pump_flow, a part's, ...
+    circuit = isinstance(drifter, physical.CircuitDrifter)
+    if si and not circuit:
         raise ValueError(f"--parameter {name} (a config key in SI) is a parameter of a drifter with its "
                          "oil circuit; this drifter's valve takes stroke, ret, switch_out, delay, "
                          "delay_out, delay_in")
@@ -438,32 +425,20 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
 
         def shown(x):
             return x
-    diagram = None
-    if isinstance(drifter, physical.CircuitDrifter):  # the SI branch and its bifurcation diagram
+    diagram, points = None, ()
+    if circuit:  # the SI branch and its bifurcation diagram
         sib = physical.continue_circuit(drifter, name, args.to if si else to, step=args.step,
                                         max_step=args.max_step, max_points=args.max_points)
-        b = sib.branch
+        b, points = sib.branch, sib.points
         diagram = _circuit_diagram(sib, out)
     else:
         start = drifter.orbit().orbit
         b = continue_orbit(start, parameter, to, step=args.step, max_step=args.max_step,
                            max_points=args.max_points)
-    head = (f"{name} ({unit})," if unit else f"{name},") if si else ""  # (a bare number: no unit)
-    circuit = isinstance(drifter, physical.CircuitDrifter)
-    columns = _branch_outputs() if circuit else []
-    rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"
-            + "".join(f",{o.shown_key}" for o in columns)]
-    for i, (lam, o) in enumerate(zip(b.values, b.orbits, strict=True)):
-        mu = max(abs(complex(m)) for m in o.multipliers) if o.multipliers.size else 0.0
-        rows.append((f"{shown(lam):.12g}," if si else "")
-                    + f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}"
-                    + ("".join(f",{x:.12g}" for x in _circuit_outputs(sib.points[i], columns)) if circuit
-                       else ""))
+    key = (f"{name} ({unit})" if unit else name) if si else None  # (a bare number: no unit)
+    rows = branch_rows(b, key=key, shown=shown, points=points, columns=branch_outputs(circuit))
     (out / "branch.csv").write_text("\n".join(rows) + "\n")
-    ev = ["kind,value,multiplier_re,multiplier_im" + (f",{name} ({unit})" if si else "")]
-    ev += [f"{e.kind}{' ' + e.surface if e.surface else ''},{e.value:.12g},{e.multiplier.real:.12g},"
-           f"{e.multiplier.imag:.12g}" + (f",{shown(e.value):.12g}" if si else "") for e in b.events]
-    (out / "events.csv").write_text("\n".join(ev) + "\n")
+    (out / "events.csv").write_text("\n".join(event_rows(b, key=key, shown=shown)) + "\n")
     files = [out / "branch.csv", out / "events.csv"] + ([diagram] if diagram is not None else [])
     if getattr(args, "json", False):
         print_json({"parameter": name, "to": args.to, "points": len(b), "status": b.status,

@@ -29,6 +29,7 @@ __all__ = ["PeriodicOrbit", "MultiImpactOrbit", "ORBIT_FIELDS"]
 TWO_PI = 2.0 * math.pi
 
 _ONE = "dict_one_impact"  # the view of a one-impact orbit's to_dict (module impactbar._shared.schema)
+_DRIFTER = "drifter_branch"  # the columns of a drifter's branch.csv (impactbar.physical.branch_table)
 
 #: The declared fields of a periodic orbit, in order: every view of an orbit is generated from them
 #: (:meth:`PeriodicOrbit.to_dict`, :meth:`OrbitList.to_dataframe`, the branch tables, a sweep's
@@ -37,6 +38,8 @@ _ONE = "dict_one_impact"  # the view of a one-impact orbit's to_dict (module imp
 ORBIT_FIELDS = Schema(
     Field("impacts", "impacts per period of the motion, m", "", dtype="i8", views={"dict"}),
     Field("periods", "load periods per period of the motion, n", "", dtype="i8", views={"dict"}),
+    Field("period", "duration of one period of the motion (2 pi n; under a drive found with the orbit, "
+                    "theory §10)", views={_DRIFTER}),
     Field("impact_times", "load time of each impact", per="impact", element="impact_time",
           views={"dict", "branch"}),
     Field("phase", "phase lag between load and impact cycle, a root of eq. 14", "rad",
@@ -47,7 +50,7 @@ ORBIT_FIELDS = Schema(
     Field("multiplicity", "multiplicity of the root (2 at a fold)", "", dtype="i8",
           views={_ONE, "table"}),
     Field("impact_velocity", "velocity of the struck end before impact", views={
-          _ONE, "table", "sweep", "si", "cli"}, label="impact vel.", fmt=".6f",
+          _ONE, "table", "sweep", "si", "cli", _DRIFTER}, label="impact vel.", fmt=".6f",
           si=SI("impact_velocity_m_s", "m/s", "velocity_m_s", None, "v/(m/s)", ".3f")),
     Field("impact_velocities", "velocity of the struck end before each impact", per="impact",
           element="impact_velocity", views={"dict", "branch", "repr"}, fmt=".6g"),
@@ -60,9 +63,10 @@ ORBIT_FIELDS = Schema(
     Field("clearance_error", "bound on the error of clearance", views={"table"}),
     Field("stable", "admissible and every non-trivial |Floquet multiplier| below 1, theory §7", "",
           dtype="b1",
-          views={"dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr"}),
+          views={"dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr", _DRIFTER}),
     Field("max_abs_multiplier", "largest non-trivial |Floquet multiplier|", views={
-          "dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr"}, label="max|mu|", fmt=".5f"),
+          "dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr", _DRIFTER}, label="max|mu|",
+          fmt=".5f"),
     Field("multipliers", "Floquet multipliers, by decreasing modulus", dtype="c16", per="multiplier",
           element="multiplier", views={"dict", _ONE, "branch"}),
     Field("schur_stable", "the paper's Schur criterion, eqs. 27-31 (theory §6)", "", dtype="b1",
