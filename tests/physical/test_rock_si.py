@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from impactbar import physical
+from impactbar.physical.outputs import OUTPUTS
 from impactbar.physical.rock import rock_blows, rock_from_config, rock_summary
 
 CONFIG = {
@@ -73,6 +74,15 @@ def test_per_blow_outputs_in_si():
                   & (out["efficiency_with_rebound"] <= 1))
     s = rock_summary(r)
     assert s["n_blows"] >= 2 and s["mean_work_on_rock_J"] > 0 and 0 < s["mean_efficiency"] <= 1
+    # the power into the rock, the registry's output: the work of the second half's impacts from its
+    # first blow to (not with) its last over the time between those blows
+    power = OUTPUTS["rock_power"]
+    assert (power.key, power.unit) == ("rock_power_W", "W") and power.key in s
+    t, blow = r.impact_times_s, r.is_blow()
+    late = t[blow & (t >= 0.5 * r.t_end_s)]
+    window = (t >= late[0]) & (t < late[-1])
+    work = np.sum(out["work_on_rock_J"][window])
+    assert s[power.key] == pytest.approx(work / (late[-1] - late[0]), rel=1e-12)
 
 
 @pytest.mark.parametrize(("edit", "message"), [

@@ -368,6 +368,10 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
     Output("drilling_rate", "m/min", "drilling rate: the penetration per blow times the blow frequency",
            _rock("drilling_rate_m_min"),
            views={"store", "figure", "record"}, machines=_BOTH, rock=True, objective="drilling_rate"),
+    # (an operating point's: the work per blow times the blow frequency, as the drilling rate; a run's,
+    # impactbar.physical.rock.rock_summary: the work of the blows and their chatter over their span)
+    Output("rock_power", "W", "power into the rock: the work done on the rock per unit time",
+           lambda r: r.rock["work_on_rock_J"] * r.point.blow_frequency_Hz, machines=_BOTH, rock=True),
     Output("peak_rod_stress", "Pa", "peak compressive stress of the incident wave in the rod",
            _rock("peak_rod_stress_Pa"), blow=lambda b: b["peak_rod_stress_Pa"], views={"store"},
            machines=_BOTH, rock=True),

@@ -23,6 +23,7 @@ from ..laws.rodrock import BilinearRock, RodRock, RodSegment
 from . import tree
 from .bar import _positive
 from .config import _section
+from .outputs import OUTPUTS
 
 __all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary", "rod_from_config"]
 
@@ -276,6 +277,10 @@ def rock_blows(hammer, trajectory) -> dict:
     }
 
 
+#: the power into the rock, as the output registry declares it (its key: ``rock_power_W``)
+_ROCK_POWER = OUTPUTS["rock_power"]
+
+
 def rock_summary(result, *, blow_fraction: float | None = None) -> dict:
     """Drilling statistics of a :class:`~impactbar.physical.SimulationResult` under the rod-rock law,
     over the blows of the second half of the run (past the start-up), chatter apart, JSON-ready.
@@ -296,8 +301,9 @@ def rock_summary(result, *, blow_fraction: float | None = None) -> dict:
         the last of them), ``mean_work_on_rock_J`` (J) and ``mean_penetration_mm`` (mm) per blow,
         ``drilling_rate_m_min`` (mean penetration per blow times the measured blow frequency, m/min),
         ``measured_rate_m_min`` (the penetration of every impact between the first and the last blow,
-        chatter included, over the time they span, m/min), ``rock_power_W`` (work on rock over that
-        time, W), ``mean_efficiency`` and ``mean_efficiency_with_rebound`` of the blows; only
+        chatter included, over the time they span, m/min), ``rock_power_W`` (the output
+        ``rock_power`` of :mod:`~impactbar.physical.outputs`: the work on rock over that time, W),
+        ``mean_efficiency`` and ``mean_efficiency_with_rebound`` of the blows; only
         ``n_blows`` and ``n_chatter`` when fewer than two blows fall in the second half.
 
     Raises
@@ -324,7 +330,7 @@ def rock_summary(result, *, blow_fraction: float | None = None) -> dict:
         "mean_penetration_mm": float(np.mean(pen)),
         "drilling_rate_m_min": float(np.mean(pen) * 1e-3 * frequency * 60.0),
         "measured_rate_m_min": float(np.sum(blows["penetration_mm"][inside]) * 1e-3 / span * 60.0),
-        "rock_power_W": float(np.sum(blows["work_on_rock_J"][inside]) / span),
+        _ROCK_POWER.key: float(np.sum(blows["work_on_rock_J"][inside]) / span),  # (J/s: W, its unit)
         "mean_efficiency": float(np.mean(blows["efficiency"][late])),
         "mean_efficiency_with_rebound": float(np.mean(blows["efficiency_with_rebound"][late])),
     })
