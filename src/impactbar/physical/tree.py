@@ -314,7 +314,7 @@ SCALE_STEPS: dict[str, tuple] = {
     "time": (("*", lambda d: d.omega_rad_s),),
     "one": (),
     "area": (("/", lambda d: d.si["rear_area_m2"]),),
-    "stiffness": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s ** 2),),  # (K / (m Omega^2), as the law)
+    "stiffness": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s ** 2),),  # K / (m Omega^2): the law reads it
     "force": (("/", lambda d: d.scales.force_N),),
     "mass": (("/", lambda d: d.bar.mass_kg),),
     "damping": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s),),
