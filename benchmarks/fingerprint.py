@@ -10,7 +10,7 @@ difference and where. ``--only GROUP ...`` restricts the groups.
 
 Each number is kept with its path (the dict keys and list indices that lead to it); the two trees'
 numbers are compared path by path, an older tree's keys read under their names now where the library
-knows the old name (``impactbar.physical.outputs.renamed_key``: the outputs' ``RENAMED``, a key in
+knows the old name (``impactbar.physical.outputs.renamed_key``: the outputs' ``RENAMED_OUTPUTS``, a key in
 another unit divided by the factor; the result attributes renamed by ``renamed_attribute``), so that
 a renamed key, which moves its number in the sorted order the sha is taken in, says "same (bitwise;
 keys renamed: a -> b)" where every number is the same.

@@ -1,5 +1,5 @@
 """``benchmarks/fingerprint.py`` compares two trees' numbers by their paths: a key an older tree
-says by its old name (the outputs' ``RENAMED``, a result's renamed attribute) is read under its name
+says by its old name (the outputs' ``RENAMED_OUTPUTS``, a result's renamed attribute) is read under its name
 now, so a rename that moves a number in the sorted order the sha is taken in is "same (bitwise;
 keys renamed: ...)", and a number that really moved still "differs" (the library's own renames,
 on records made up here)."""

@@ -62,21 +62,24 @@ def test_entry_points_live_in_modules_named_for_them():
 def test_renamed_public_names_resolve_to_the_new_ones_with_a_warning():
     """The motion under a drive is "driven" in the public names too (``DrivenOrbit``,
     ``find_driven_orbit``, ``DrivenTrajectory``); each old "switched" name still resolves, to the
-    same object, with a DeprecationWarning naming the new one, and is not advertised."""
+    same object, with a DeprecationWarning naming the new one, and is not advertised; so does the
+    outputs' table of old names, once ``RENAMED`` as the module attributes' table was (now
+    ``RENAMED_OUTPUTS`` and ``RENAMED_PUBLIC_NAMES``)."""
     import pytest
 
-    from impactbar._shared.renamed import RENAMED
+    from impactbar._shared.renamed import RENAMED_PUBLIC_NAMES as NEW
 
     homes = {"SwitchedOrbit": ("impactbar", "impactbar.orbits"), "find_switched_orbit": ("impactbar.orbits",),
              "SwitchedTrajectory": ("impactbar", "impactbar.simulation"),
-             "DrifterMapSpec": ("impactbar.sweeps",), "parse_map_spec": ("impactbar.sweeps",)}
-    assert set(homes) == set(RENAMED)
+             "DrifterMapSpec": ("impactbar.sweeps",), "parse_map_spec": ("impactbar.sweeps",),
+             "RENAMED": ("impactbar.physical.outputs",)}
+    assert set(homes) == set(NEW)
     for old, packages in homes.items():
         for package in packages:
             module = importlib.import_module(package)
-            with pytest.warns(DeprecationWarning, match=f"{package}.{old} is renamed {RENAMED[old]}"):
+            with pytest.warns(DeprecationWarning, match=f"{package}.{old} is renamed {NEW[old]}"):
                 value = getattr(module, old)
-            assert value is getattr(module, RENAMED[old])
+            assert value is getattr(module, NEW[old])
             assert old not in module.__all__ and old not in dir(module)
     with pytest.raises(AttributeError):
         getattr(impactbar, "find_switched_orbit")  # noqa: B009 (never a top-level name)

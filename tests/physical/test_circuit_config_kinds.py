@@ -39,13 +39,14 @@ TABLES = {
 
 
 def _python_part(kind, d):
-    """The Python API's part, its values made dimensionless here with the drifter's scales."""
+    """The Python API's part, its values made dimensionless here with the drifter's scales, each as
+    its scale's steps are written (a division by a scale, not a product by its inverse)."""
     orifice = math.sqrt(P) / d.flow_scale_m3_s
     if kind == "laminar_leak":
-        return LaminarLeak("rear", "front", conductance=6e-12 * (P / d.flow_scale_m3_s), name="p")
+        return LaminarLeak("rear", "front", conductance=6e-12 * P / d.flow_scale_m3_s, name="p")
     if kind == "cushion":
-        return Cushion(volume=1.25e-5 * (1.0 / d.volume_scale_m3), coefficient=7.5e-6 * orifice,
-                       gaps=tuple(y * (1.0 / d.bar.length_m) for y in (0.027, 0.036, 0.045)),
+        return Cushion(volume=1.25e-5 / d.volume_scale_m3, coefficient=7.5e-6 * orifice,
+                       gaps=tuple(y / d.bar.length_m for y in (0.027, 0.036, 0.045)),
                        openings=(1.0, 0.4, 0.1), name="p")
     return CheckValve("front", "supply", coefficient=3.75e-6 * orifice, cracking_pressure=50000.0 / P,
                       opening_span=50000.0 / P, name="p")

@@ -3,7 +3,7 @@
 tables, the design maps' stored variables and their attributes, the dimensionless sweep's, the
 sensitivities, the optimiser's objectives and constraints, the operating point's and a blow's figures)
 under its name, or its name with its unit (its key), and with its long name; a name it had before
-(:data:`~impactbar.physical.outputs.RENAMED`) still reads it, with a ``DeprecationWarning``.
+(:data:`~impactbar.physical.outputs.RENAMED_OUTPUTS`) still reads it, with a ``DeprecationWarning``.
 
 The views are walked, not listed: each schema's fields, and the figures an output is read from,
 found by reading each output from a recording stand-in of an operating point and of a blow (an
@@ -18,7 +18,7 @@ import pytest
 
 from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, IDEAL_CONSTRAINTS, OBJECTIVES
 from impactbar.physical.optimize_outputs import constraint_output
-from impactbar.physical.outputs import OUTPUTS, RENAMED, current_keys, current_name, output_by_key
+from impactbar.physical.outputs import OUTPUTS, RENAMED_OUTPUTS, current_keys, current_name, output_by_key
 from impactbar.physical.results import PHYSICAL_ORBIT_FIELDS
 from impactbar.physical.sensitivity import FIGURE_UNITS
 from impactbar.sweeps.map_spec import map_variables
@@ -108,7 +108,7 @@ def _output_named(name: str):
 def test_each_view_names_an_output_by_its_name_and_long_name():
     rows = _views()
     stale = [f"{view}: {name}" for view, name, _, _ in rows
-             if name in RENAMED or any(name.startswith(f"{k}_") for k in RENAMED)]
+             if name in RENAMED_OUTPUTS or any(name.startswith(f"{k}_") for k in RENAMED_OUTPUTS)]
     assert not stale, f"a view still says an old name: {stale}"
     seen = 0
     bad = []
@@ -127,7 +127,7 @@ def test_the_constraints_are_named_by_their_outputs():
     """Each constraint is its output's name or key (``min_<name>``: at least it): a constraint
     named otherwise is one quantity under a second name."""
     for name in (*DEFAULT_CONSTRAINTS, *IDEAL_CONSTRAINTS):
-        assert name not in RENAMED
+        assert name not in RENAMED_OUTPUTS
         c = constraint_output(name)
         assert name in (c.output.name, c.output.key, f"min_{c.output.name}"), \
             f"constraint {name!r} limits the output {c.output.name!r}: name it by it"
@@ -161,9 +161,9 @@ def test_a_constraint_given_by_its_old_name_limits_the_same_output_on_the_same_s
     assert old == constraint_output("minimum_pressure") and old.sense == -1
 
 
-@pytest.mark.parametrize("old", sorted(RENAMED))
+@pytest.mark.parametrize("old", sorted(RENAMED_OUTPUTS))
 def test_an_old_name_reads_the_output_with_a_deprecation_warning(old):
-    new = RENAMED[old]
+    new = RENAMED_OUTPUTS[old]
     o = OUTPUTS[new]
     with pytest.warns(DeprecationWarning, match=f"'{old}' is now called '{new}'"):
         assert output_by_key(old) is o

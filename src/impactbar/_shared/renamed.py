@@ -5,15 +5,18 @@ from __future__ import annotations
 
 import warnings
 
-#: old public name -> new public name ("switched" was the word for both the motion under a drive and
-#: the valve drive: the motion under a drive is now "driven", the valve drive ``PositionSwitchedDrive``)
-RENAMED = {
+#: old public name of a module's attribute -> its new name ("switched" was the word for both the
+#: motion under a drive and the valve drive: the motion under a drive is now "driven", the valve drive
+#: ``PositionSwitchedDrive``); :func:`renamed` resolves each in the modules that export the new one
+RENAMED_PUBLIC_NAMES = {
     "SwitchedOrbit": "DrivenOrbit",
     "find_switched_orbit": "find_driven_orbit",
     "SwitchedTrajectory": "DrivenTrajectory",
     # one sweep spec class for the dimensionless bar and a drifter's design map
     "DrifterMapSpec": "SweepSpec",
     "parse_map_spec": "parse_spec",
+    # the outputs' table of old names (this one and it were both called RENAMED)
+    "RENAMED": "RENAMED_OUTPUTS",
 }
 
 
@@ -38,7 +41,7 @@ def renamed(module, name: str):
     -------
     object or None
     """
-    new = RENAMED.get(name)
+    new = RENAMED_PUBLIC_NAMES.get(name)
     if new is None or new not in getattr(module, "__all__", ()):
         return None
     warnings.warn(f"{module.__name__}.{name} is renamed {new}; the old name will be removed",

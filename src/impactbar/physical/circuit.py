@@ -199,7 +199,7 @@ class CircuitDrifter(_ScaledDrifter):
     def _si_scale(self, name: str):
         """The scale that takes the SI value of the config key ``name`` to its dimensionless parameter
         as the config's value is taken (:func:`~impactbar.physical.tree.convert`): the tree's field's
-        (:func:`~impactbar.physical.tree.continued`), a part's field's factor (as
+        (:func:`~impactbar.physical.tree.continued`) or a part's field's (as
         :meth:`~impactbar.physical.circuit_parts.PartSpec.build` builds the part)."""
         f = part_field(self.parts, name)
         if f is None:
@@ -208,7 +208,7 @@ class CircuitDrifter(_ScaledDrifter):
                 raise ValueError(f"{name}: this drifter has no [valve]: the part "
                                  f"{valve_stand_in(self.config, self.parts)} stands in for it")
             return tree.continued(self, name).scale
-        return tree.SCALES[f.scale]
+        return f.scale
 
     def to_dimensionless(self, name: str, value) -> tuple[str, float]:
         r"""The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and

@@ -158,12 +158,14 @@ class PartSpec:
         return _tree_field(self.name, next(f for f in part_kinds()[self.kind].si_fields if f.name == name))
 
     def build(self, drifter):
-        """The dimensionless part for ``drifter``'s scales (each field's :data:`~tree.SCALES`)."""
+        """The dimensionless part for ``drifter``'s scales: each field's SI value (each element of a
+        list's) converted by its scale's steps (:func:`~impactbar.physical.tree.convert`, theory §11,
+        eq. 2), as the tree's own fields and a continuation's target are."""
         cls = part_kinds()[self.kind]
-        scales = {f.name: tree.SCALES[f.scale](drifter) for f in (*cls.si_fields, *cls.si_lists)}
+        scale = {f.name: f.scale for f in (*cls.si_fields, *cls.si_lists)}
         return cls(name=self.name, **dict(self.connections),
-                   **{k: v * scales[k] for k, v in self.values},
-                   **{k: tuple(x * scales[k] for x in v) for k, v in self.lists})
+                   **{k: tree.convert(scale[k], drifter, v) for k, v in self.values},
+                   **{k: tuple(tree.convert(scale[k], drifter, x) for x in v) for k, v in self.lists})
 
 
 def _tree_field(name: str, f) -> tree.Field:

@@ -36,7 +36,8 @@ def read_cache(path, tag: str) -> dict:
 
 def _current(record: dict) -> dict:
     """A stored design's record with its figures and constraints under the outputs' names now
-    (a name an output had before: :data:`~impactbar.physical.outputs.RENAMED`, a ``DeprecationWarning``)."""
+    (a name an output had before: :data:`~impactbar.physical.outputs.RENAMED_OUTPUTS`, a
+    ``DeprecationWarning``)."""
     from .outputs import current_keys
 
     for part in ("objectives", "constraints"):

@@ -18,7 +18,7 @@ m/s).
 
 One name per quantity: an output's name (with its unit as a key) is the only one any view uses,
 and :attr:`Output.long_name` the only long name. A name an output had before is in
-:data:`RENAMED`: given to a tool (a constraint, a design map's or a store's variable, a key of a
+:data:`RENAMED_OUTPUTS`: given to a tool (a constraint, a design map's or a store's variable, a key of a
 stored record) it still reads the output, with a ``DeprecationWarning`` naming the new one
 (:func:`current_name`, :func:`current_keys`).
 
@@ -33,6 +33,7 @@ output of a number can be a constraint of the optimiser (its value at most the l
 from __future__ import annotations
 
 import math
+import sys
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -40,11 +41,12 @@ from functools import cached_property
 
 import numpy as np
 
+from .._shared.renamed import renamed
 from .._shared.schema import Field
 from ..orbits.orbit import ORBIT_FIELDS
 from .display_units import display_unit
 
-__all__ = ["Output", "OUTPUTS", "RENAMED", "register_output", "unregister_output", "outputs",
+__all__ = ["Output", "OUTPUTS", "RENAMED_OUTPUTS", "register_output", "unregister_output", "outputs",
            "added_outputs", "Reading", "output_values", "output_by_key", "current_name", "current_keys",
            "renamed_key"]
 
@@ -401,13 +403,14 @@ _BUILTIN = frozenset(OUTPUTS)
 #: a constraint now named by it; the hammer's one-impact orbit and its simulation said ``blow_energy``
 #: for ``impact_energy`` (``blow_energy_J``, ``mean_blow_energy_J``) and ``power`` for
 #: ``impact_power`` (``power_W`` and ``mean_power_W``, in W: :func:`renamed_key`).
-RENAMED = {"peak_incident_stress": "peak_rod_stress", "rock_efficiency": "efficiency",
-           "blow_efficiency": "efficiency", "percussive_power": "impact_power",
-           "min_pressure": "minimum_pressure", "blow_energy": "impact_energy", "power": "impact_power"}
+RENAMED_OUTPUTS = {"peak_incident_stress": "peak_rod_stress", "rock_efficiency": "efficiency",
+                   "blow_efficiency": "efficiency", "percussive_power": "impact_power",
+                   "min_pressure": "minimum_pressure", "blow_energy": "impact_energy",
+                   "power": "impact_power"}
 
 
 def current_name(name: str, what: str = "output") -> str:
-    """An output's name now: ``name`` itself, or the name that replaced it (:data:`RENAMED`, its key
+    """An output's name now: ``name`` itself, or the name that replaced it (:data:`RENAMED_OUTPUTS`, its key
     with the unit too: ``peak_incident_stress_Pa``), with a ``DeprecationWarning`` naming it.
 
     Parameters
@@ -453,7 +456,7 @@ def current_keys(record: dict, what: str = "key") -> dict:
     Returns
     -------
     dict
-        ``record`` with each old name or key (:data:`RENAMED`) replaced by the name now
+        ``record`` with each old name or key (:data:`RENAMED_OUTPUTS`) replaced by the name now
         (:func:`current_name`: a ``DeprecationWarning`` each), in its order; ``record`` itself where
         none is old.
     """
@@ -463,9 +466,9 @@ def current_keys(record: dict, what: str = "key") -> dict:
 
 
 def _old_keys() -> dict:
-    """Each old name of :data:`RENAMED` and its key with the unit, to the name or key now."""
+    """Each old name of :data:`RENAMED_OUTPUTS` and its key with the unit, to the name or key now."""
     out = {}
-    for old, new in RENAMED.items():
+    for old, new in RENAMED_OUTPUTS.items():
         o = OUTPUTS[new]
         out[old] = new
         if o.key != new:
@@ -479,7 +482,7 @@ _OLD_KEYS = _old_keys()
 
 
 def renamed_key(key: str) -> tuple[str, float]:
-    """The key now of a value stored under an old name (:data:`RENAMED`), and the factor its value
+    """The key now of a value stored under an old name (:data:`RENAMED_OUTPUTS`), and the factor its value
     is divided by: an old name or key of :func:`current_name` (factor 1), or an old name with the SI
     unit where the output's key has another (``power_W``, in W, is ``impact_power_kW``: 1000). No
     warning: for tools that compare a record of an older version with one of this (source:
@@ -504,7 +507,7 @@ def renamed_key(key: str) -> tuple[str, float]:
     stem = _old_stem(key)
     if stem is not None:
         return key[:len(key) - len(stem)] + _OLD_KEYS[stem], 1.0
-    for old, new in RENAMED.items():
+    for old, new in RENAMED_OUTPUTS.items():
         o = OUTPUTS[new]
         si_unit, factor = _TO_SI.get(o.unit, (o.unit, 1.0))
         if factor != 1.0 and key == _named(old, si_unit):
@@ -614,3 +617,11 @@ def output_values(point, selected, reading: Reading | None = None) -> dict:
     """
     r = Reading(point) if reading is None else reading
     return {o.name: o.of(r) for o in selected}
+
+
+def __getattr__(name: str):
+    # (an old name of a table here, :data:`~impactbar._shared.renamed.RENAMED_PUBLIC_NAMES`: the new
+    # one's value, with a DeprecationWarning)
+    if (value := renamed(sys.modules[__name__], name)) is not None:
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

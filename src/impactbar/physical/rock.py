@@ -69,6 +69,20 @@ class RodPiece:
 
 
 @dataclass(frozen=True)
+class _Scaled:
+    """A piston and a hammer's scales as the parameter tree's scales read a drifter
+    (:data:`~impactbar.physical.tree.SCALE_STEPS`: ``bar``, ``scales`` and ``omega_rad_s``)."""
+
+    bar: object
+    scales: object
+
+    @property
+    def omega_rad_s(self) -> float:
+        r""":math:`\Omega` (rad/s), the scales'."""
+        return self.scales.omega_rad_s
+
+
+@dataclass(frozen=True)
 class DrillString:
     r"""The rod, the bit and the rock of a drill in SI units (theory §4d).
 
@@ -125,13 +139,16 @@ class DrillString:
         (a stepped piston's rod impedances stay relative to the uniform
         piston of the same mass and length, theory §12)."""
         z_p = bar.mass_kg * bar.wave_speed_m_s / bar.length_m
-        m = bar.mass_kg
-        om2 = scales.omega_rad_s ** 2
         segs = [RodSegment(length=g.length_m / bar.length_m, impedance=g.impedance_kg_s / z_p,
                            wave_speed=g.wave_speed_m_s / bar.wave_speed_m_s) for g in self.segments]
-        return RodRock(segments=segs, rock=BilinearRock(k=self.rock_k_N_m / (m * om2),
-                                                        k_u=self.rock_k_u_N_m / (m * om2)),
-                       bit_mass=self.bit_mass_kg / m, feed=self.feed_N / scales.force_N,
+        # (the stiffnesses, the bit's mass and the feed by the parameter tree's declared scales, as
+        # a continuation's target of rock.k, bit.mass or rock.feed is converted)
+        edge = _Scaled(bar, scales)
+        rock = BilinearRock(k=tree.convert("stiffness", edge, self.rock_k_N_m),
+                            k_u=tree.convert("stiffness", edge, self.rock_k_u_N_m))
+        return RodRock(segments=segs, rock=rock,
+                       bit_mass=tree.convert("mass", edge, self.bit_mass_kg),
+                       feed=tree.convert("force", edge, self.feed_N),
                        cells_per_piston=self.cells_per_piston, method=self.method)
 
     def to_dict(self) -> dict:

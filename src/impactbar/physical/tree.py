@@ -315,7 +315,7 @@ SCALE_STEPS: dict[str, tuple] = {
     "time": (("*", lambda d: d.omega_rad_s),),
     "one": (),
     "area": (("/", lambda d: d.si["rear_area_m2"]),),
-    "stiffness": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s ** 2),),  # (K / (m Omega^2), as the law)
+    "stiffness": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s ** 2),),  # K / (m Omega^2): the law reads it
     "force": (("/", lambda d: d.scales.force_N),),
     "mass": (("/", lambda d: d.bar.mass_kg),),
     "damping": (("/", lambda d: d.bar.mass_kg * d.omega_rad_s),),
@@ -387,7 +387,8 @@ def convert_back(scale: str | Callable, drifter, value: float) -> float:
 
 
 #: Each scale's factor from SI to dimensionless, a function of the drifter (theory §11, eq. 2): its
-#: steps applied to 1 (the factor a continuation's target and a part's fields are multiplied by).
+#: steps applied to 1, to show or compare; a value is converted by the steps (:func:`convert`), which
+#: a product by this factor may round apart in the last bit.
 SCALES: dict[str, Callable] = {name: (lambda d, name=name: convert(name, d, 1.0)) for name in SCALE_STEPS}
 
 

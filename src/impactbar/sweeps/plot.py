@@ -115,7 +115,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
     variable : str, optional
         The variable of a design map to draw (default the blow frequency); only for one. A name an
         output had before reads the output's variable, with a ``DeprecationWarning``
-        (:data:`~impactbar.physical.outputs.RENAMED`).
+        (:data:`~impactbar.physical.outputs.RENAMED_OUTPUTS`).
 
     Returns
     -------

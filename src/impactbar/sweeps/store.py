@@ -399,7 +399,7 @@ def _write_done(path: Path, done: np.ndarray, sums: np.ndarray, group=None) -> N
 def open_sweep(path):
     """Open a sweep store as an ``xarray.Dataset`` (lazily; ``xarray.open_zarr`` does the same); a
     variable of an output stored under a name it had before holds the name now
-    (:data:`~impactbar.physical.outputs.RENAMED`, with a ``DeprecationWarning``).
+    (:data:`~impactbar.physical.outputs.RENAMED_OUTPUTS`, with a ``DeprecationWarning``).
 
     Raises
     ------

@@ -355,16 +355,6 @@ class HydraulicCircuitDrive(Drive):
                 "check that the chambers keep a positive volume (rear_volume against the stroke) and that "
                 "the pump flow and the areas can move the piston")
 
-    def _check_volumes(self, weights, piece, t) -> None:
-        # (weights: the bar's drive_weights)
-        nur, nuf = self.chambers.least_volumes(-(piece.y[:, :weights.size] @ weights))
-        if nur <= 0.0 or nuf <= 0.0:
-            which = "rear" if nur <= 0.0 else "front"
-            now = getattr(self.chambers, which + "_volume")
-            raise ValueError(f"the {which} chamber empties (V <= 0) near t = {t:.6g}: the piston overtravels "
-                             f"it; give a larger {which}_volume (now {now:g}) or a switch position nearer "
-                             "the stop")
-
     # -- the Drive interface ----------------------------------------------------------------------
     def start(self, model, q, v) -> DriveState:
         sup, acc = self.supply, self.accumulator

@@ -31,6 +31,9 @@ from .settings import circuit_settings
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
 
+#: What a blow that empties a chamber is told (:meth:`~impactbar.drives.circuit.Chambers.check_volumes`).
+_EMPTIED_IN_BLOW = "during the blow near t = {t:.6g}: give a larger {which}_volume (now {now:g})"
+
 
 class EndPiece(HermiteSteps):
     """The circuit over one interval of a blow: the integrator's steps and a cubic Hermite
@@ -258,7 +261,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             _end_code(drive).end_field_at(Y, par, exts, f)
             piece = EndPiece(ts, Y, f, drive.chambers.area_ratio, drive.layout)
             pieces.append(piece)
-            _check_volumes(drive, Y[:, EK.Y_W], t)
+            drive.chambers.check_volumes(Y[:, EK.Y_W], t, _EMPTIED_IN_BLOW)
             impulses[k] += Y[-1, EK.Y_CIRCUIT + ns]  # I
             w, z = float(Y[-1, EK.Y_W]), Y[-1, EK.Y_CIRCUIT:EK.Y_CIRCUIT + ns].copy()
             te = float(ts[-1])
@@ -377,11 +380,3 @@ def _end_directions(drive, mode) -> tuple:
     the mode), as the flight's from its ramp's end on."""
     return drive._directions(mode)[RAMP_EV:]
 
-
-def _check_volumes(drive, w, t) -> None:
-    ch = drive.chambers
-    rear, front = ch.least_volumes(w)
-    if rear <= 0.0 or front <= 0.0:
-        which = "rear" if rear <= 0.0 else "front"
-        raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "
-                         f"larger {which}_volume (now {getattr(ch, which + '_volume'):g})")

@@ -198,6 +198,10 @@ class CircuitPiece(HermiteSteps, ModalEnd):
 #: steps grow as they are taken, so the bound costs nothing until a flight needs it.
 _MAX_STEPS = 2_000_000
 
+#: What a flight that empties a chamber is told (:meth:`~impactbar.drives.circuit.Chambers.check_volumes`).
+_OVERTRAVEL = ("near t = {t:.6g}: the piston overtravels it; give a larger {which}_volume (now {now:g}) or a "
+            "switch position nearer the stop")
+
 
 #: The tolerances of a variational flight's state under Magnus, relative to the flight's own: without
 #: ``Phi``'s ``n^2`` components in CVODE's error test the plain flight takes some three times fewer
@@ -636,7 +640,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         keep_t = np.concatenate(([True], later))
         ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, c, drive.chambers.area_ratio, L, field_at)
-    drive._check_volumes(weights, piece, t)
+    drive.chambers.check_volumes(-(piece.y[:, :weights.size] @ weights), t, _OVERTRAVEL)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)

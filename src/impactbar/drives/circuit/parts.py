@@ -99,6 +99,40 @@ class Chambers:
         """
         return self.rear_volume - float(w.max()), self.front_volume + self.area_ratio * float(w.min())
 
+    def check_volumes(self, w, t: float, advice: str) -> None:
+        """Refuse a motion that empties a chamber (theory §11: its volume at or below 0 somewhere in
+        the driven end's displacements ``w``, :meth:`least_volumes`), the rear chamber named before
+        the front one.
+
+        Parameters
+        ----------
+        w : numpy.ndarray
+            The displacements away from the stop (model length units), at least one.
+        t : float
+            When the motion starts (model time units), for the message.
+        advice : str
+            The message after the chamber's name: when and what to do, formatted with ``t``,
+            ``which`` (``"rear"`` or ``"front"``) and ``now`` (that chamber's volume).
+
+        Raises
+        ------
+        ValueError
+            A chamber empties: ``the <which> chamber empties (V <= 0) <advice>``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> Chambers(0.5, 0.4, 0.2).check_volumes(np.array([0.3, 0.5]), 1.0, "near t = {t:g}: {which}")
+        Traceback (most recent call last):
+        ...
+        ValueError: the rear chamber empties (V <= 0) near t = 1: rear
+        """
+        rear, front = self.least_volumes(w)
+        if rear <= 0.0 or front <= 0.0:
+            which = "rear" if rear <= 0.0 else "front"
+            raise ValueError(f"the {which} chamber empties (V <= 0) "
+                             + advice.format(t=t, which=which, now=getattr(self, which + "_volume")))
+
     def records(self, front: int, rear: int, bulk_modulus: float, front_energy: int = -1,
                 rear_energy: int = -1) -> list:
         """The chambers as network records (:mod:`._network`): the front and rear nodes (their dead
