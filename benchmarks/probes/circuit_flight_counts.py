@@ -49,14 +49,25 @@ def counted(model, drive) -> tuple:
     return orbit, cpu, flights[0], dict(total)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def drill(name: str) -> tuple:
+    """``(model, drive)`` of the drill ``name``: ``"spool"``, ``"parts"``
+    (``examples/circuit_drill_<name>.toml``) or ``"preset"`` (the preset ``circuit-drifter``)."""
+    d = (circuit_preset("circuit-drifter") if name == "preset"
+         else load(EXAMPLES / f"circuit_drill_{name}.toml"))
+    return d.model(), d.drive()
+
+
+def arguments(doc: str) -> argparse.Namespace:
+    """The probes' command line: the drill and ``--rounds``."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("drill", choices=("spool", "parts", "preset"))
     parser.add_argument("--rounds", type=int, default=3)
-    a = parser.parse_args()
-    d = (circuit_preset("circuit-drifter") if a.drill == "preset"
-         else load(EXAMPLES / f"circuit_drill_{a.drill}.toml"))
-    model, drive = d.model(), d.drive()
+    return parser.parse_args()
+
+
+def main() -> None:
+    a = arguments(__doc__)
+    model, drive = drill(a.drill)
     find_orbit(model, drive)  # (compiles)
     orbit, _, flights, stats = counted(model, drive)
     print(f"{a.drill}: flights {flights}, " + ", ".join(f"{k} {v}" for k, v in stats.items()))

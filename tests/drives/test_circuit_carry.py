@@ -4,7 +4,9 @@ started from the product of the flights and saltations before it instead of the 
 
 Checked against independent numbers: the shooting Jacobian at the orbit against central differences
 of the same plain flights, and against the Jacobian composed after each flight (``carry=False``, the
-way before); the cost: CVODE's steps over the variational period.
+way before); the cost: CVODE's steps over the variational period. Such a circuit's orbit is the root
+of plain flights at a finer tolerance (``root_settings``), with no closing step by a variational
+flight: checked against an orbit at a hundred times finer tolerance.
 """
 
 import dataclasses
@@ -16,6 +18,7 @@ import pytest
 import impactbar.drives.circuit.flight as FL
 from impactbar import find_orbit
 from impactbar.drives.circuit import CircuitFlightSettings, _cvode
+from impactbar.drives.circuit.settings import circuit_settings
 from impactbar.physical import circuit_preset, load
 
 SPOOL = Path(__file__).resolve().parents[2] / "examples" / "circuit_drill_spool.toml"
@@ -93,3 +96,39 @@ def test_carrying_spends_the_fast_transients_once_a_period(orbit, monkeypatch):
         count[carry] = sum(steps)
     assert len(steps) > 20
     assert count[True] < count[False] / 2, count
+
+
+def test_the_spools_orbit_is_its_finer_plain_flights_root_without_a_closing_step(spool, orbit, monkeypatch):
+    """The chord's plain flights at ``ROOT_TOLERANCE`` times the drive's tolerance (only where the
+    variational flights carry: not on the preset, nor with ``carry=False``): their root is the orbit,
+    one variational period at the drive's tolerance flown (the orbit's data and multipliers) where a
+    closing Newton step flew another. Nearer an orbit at ``rtol = 1e-12`` than that closing step's root
+    (measured against main's reference: 1.3e-10 of the unknowns and 8.4e-10 of the multipliers, the
+    closing step's 2.1e-10 and 1.2e-9)."""
+    model, drive = spool
+    fine = drive.root_settings(model)
+    assert (fine.rtol, fine.atol) == pytest.approx((3e-11, 3e-13), rel=1e-12)
+    assert drive.root_settings(model, CircuitFlightSettings(carry=False)) is None
+    assert drive.root_settings(model.with_(n_modes=2)) is None
+    preset = circuit_preset("circuit-drifter")
+    assert preset.drive().root_settings(preset.model()) is None
+    flights = []
+    flight = FL.circuit_flight
+
+    def counted(*args, **kwargs):
+        settings = kwargs.get("settings", args[7] if len(args) > 7 else None)
+        variational = kwargs.get("variational", args[8] if len(args) > 8 else False)
+        if variational and circuit_settings(settings).rtol == 1e-10:
+            flights.append(1)
+        return flight(*args, **kwargs)
+
+    monkeypatch.setattr(FL, "circuit_flight", counted)
+    again = find_orbit(model, drive)
+    monkeypatch.undo()
+    assert len(flights) == 29  # (one period: the closing step's would make 58)
+    assert np.array_equal(again._unknowns, orbit._unknowns)
+    ref = find_orbit(model, drive, settings=CircuitFlightSettings(rtol=1e-12, atol=1e-14))
+    X, R = np.asarray(orbit._unknowns), np.asarray(ref._unknowns)
+    assert np.max(np.abs(X - R) / np.maximum(np.abs(R), 1e-2)) < 1.7e-10
+    mu, mu_ref = (np.sort(np.abs(np.asarray(o.multipliers)))[::-1][:2] for o in (orbit, ref))
+    assert np.allclose(mu, mu_ref, rtol=1e-9, atol=0.0)

@@ -61,12 +61,18 @@ class OwnFlight:
         ``Flight.sensitivity`` is the Jacobian carried through the flight (the shooting problem then
         composes the events' saltations alone, theory §11); ``None`` (default) or ``False``: each
         flight's fundamental matrix from the identity, composed after.
+    root_settings : callable or None, optional
+        ``root_settings(model, settings) -> FlightSettings or None``: the integrator of plain flights
+        whose root is the orbit itself, as accurate as the variational flights' state, so that the
+        chord's root needs no closing step by a variational flight (theory §11, *The integrator*);
+        ``None`` (default), or a ``None`` returned: the orbit is the variational flights' root.
     """
 
     fly: Callable[..., Any]
     variational: bool = False
     state_settings: Callable[..., Any] | None = None
     carried: Callable[..., Any] | None = None
+    root_settings: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True)

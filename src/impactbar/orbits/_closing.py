@@ -23,7 +23,7 @@ import numpy as np
 from ..drives.orbitproblem import at_rounding_floor, step_size
 
 __all__ = ["CLOSING_HANDOVER", "LIFTED_HANDOVER", "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "close",
-           "checked_root"]
+           "checked_root", "root_settings"]
 
 #: The size of a Newton step (relative to the unknowns, as Newton's steps are measured) after which
 #: the chord hands a one-impact orbit over to its closing step (the preset ``circuit-drifter``'s first
@@ -48,6 +48,35 @@ CLOSING_CHECK = 0.1
 #: steps 12 did, and the preset's orbits take none of them (closing steps of 3e-8 to 5e-8).
 STEER_ERROR = 1e-3
 CLOSING_STEPS = 4
+
+_UNSET = object()
+
+
+def root_settings(problem):
+    """The integrator of the plain flights whose root is the orbit of ``problem`` (a
+    :class:`.driven.ShootingProblem`), its drive's ``OwnFlight.root_settings`` with the problem's
+    settings, made once a problem: the chord's residuals then take those flights and its root needs
+    no closing step (:meth:`.driven.ShootingProblem.solve`); ``None`` where the drive has none, with
+    coupled blows, or where the variational flights' state is a plain flight of its own (the checked
+    root's).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+
+    Returns
+    -------
+    FlightSettings or None
+    """
+    out = problem.__dict__.get("_root_settings", _UNSET)
+    if out is _UNSET:
+        own = problem.drive.abilities.flight if problem.variational else None
+        wanted = own is not None and own.root_settings is not None and not problem.coupled \
+            and not problem.state_flights
+        out = own.root_settings(problem.model, problem.settings) if wanted else None
+        problem._root_settings = out
+    return out
+
 
 _SINGULAR = "find_orbit: the Jacobian of the periodic-orbit problem is singular at its root"
 

@@ -292,9 +292,9 @@ class ShootingProblem(OrbitProblem):
             return out, t_after, after.mode, arrival, pieces, events, D
         return out, t_after, after.mode, arrival, pieces, events
 
-    def _map(self, k, y):
+    def _map(self, k, y):  # (the plain flights of the orbit's root: C.root_settings, default None)
         tau, mode = self.blocks[k]
-        y_after, *_ = self._flight(tau, mode, y)
+        y_after, *_ = self._flight(tau, mode, y, settings=C.root_settings(self))
         return y_after
 
     # -- the problem --------------------------------------------------------------------------------
@@ -514,8 +514,8 @@ class ShootingProblem(OrbitProblem):
             raise  # at some 1.5 times the cost of each step)
         except ValueError:  # (a plain flight off the way, a chord that does not converge: Newton's
             return newton(self.residual, X, self.positive, tol, max_iter)  # method of before, its verdict)
-        if not checked:
-            return self._close(root, J)
+        if not checked:  # (no closing step where the chord's flights' root is the orbit's)
+            return root if C.root_settings(self) is not None else self._close(root, J)
         return checked_root(self, self._close(root, J, tol), tol, max_iter)
 
     def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):

@@ -29,7 +29,7 @@ from .parameters import DECLARED
 from .part_flows import part_flows
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 from .preset import preset_parts
-from .settings import DEFAULT_SETTINGS, circuit_settings
+from .settings import DEFAULT_SETTINGS, ROOT_TOLERANCE, circuit_settings
 from .watch import watched
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
@@ -537,6 +537,30 @@ class HydraulicCircuitDrive(Drive):
         if settings.carry == "auto":
             return bool(self.layout.mechanical) and not uses_magnus(settings.sensitivity, model)
         return bool(settings.carry)
+
+    def root_settings(self, model, settings=None):
+        """The integrator of the plain flights whose root is the orbit of ``model`` with ``settings``
+        (default :attr:`integrator`), where the variational flights carry the Jacobian so far
+        (:meth:`carries`: a spool valve's circuit under CVODE's variational flights): ``settings``'
+        tolerances :data:`~.settings.ROOT_TOLERANCE` times finer, their root as accurate as the
+        variational flights' state, so that the orbit needs no closing Newton step by a variational
+        flight (theory §11, *The integrator*); ``None`` otherwise (the orbit is the variational
+        flights' root, as on the preset).
+
+        Parameters
+        ----------
+        model : BarModel
+        settings : FlightSettings or None, optional
+
+        Returns
+        -------
+        CircuitFlightSettings or None
+        """
+        settings = circuit_settings(settings if settings is not None else self.integrator)
+        if not self.carries(model, settings):
+            return None
+        return dataclasses.replace(settings, rtol=settings.rtol * ROOT_TOLERANCE,
+                                   atol=settings.atol * ROOT_TOLERANCE)
 
     def variational_state_settings(self, model, settings=None):
         """Where the variational flights with ``settings`` (default :attr:`integrator`) take their
