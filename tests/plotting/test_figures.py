@@ -161,3 +161,26 @@ def test_interval_plot_does_not_histogram_rounding_noise(rng):
     assert_readable(ax3.figure)
     assert "v(i+1)" in ax3.get_ylabel()
     plt.close("all")
+
+
+@pytest.mark.parametrize("fig", ["fig4", "fig8"])  # (a colorbar; two axes sharing x)
+def test_a_png_is_drawn_once_and_is_what_savefig_writes(fig, tmp_path, monkeypatch):
+    """The paper's PNG writer makes the constrained layout itself and draws the figure once; its file is
+    byte for byte matplotlib's own ``savefig`` of the same figure (which runs the layout in a draw with
+    the drawing switched off, then draws again)."""
+    from matplotlib.figure import Figure
+
+    from impactbar.plotting.paper import _save
+
+    data = getattr(paper, f"{fig}_data")(10)
+
+    def figure():
+        ax = getattr(paper, f"{fig}_plot")(data)
+        return (ax[0] if isinstance(ax, tuple) else ax).figure
+
+    figure().savefig(tmp_path / "savefig.png", dpi=130)
+    draws, draw = [], Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: draws.append(1) or draw(self, renderer))
+    _save(figure(), tmp_path / "once.png", dpi=130)
+    assert len(draws) == 1
+    assert (tmp_path / "once.png").read_bytes() == (tmp_path / "savefig.png").read_bytes()

@@ -12,7 +12,41 @@ from __future__ import annotations
 
 import time
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "KERNELS", "kernel_count"]
+
+#: the kernels each first call of :func:`_tasks` compiles into an empty cache, by its label, in order:
+#: numba's compiles (one a kernel and signature) and the oil circuit's C callbacks, as ``impactbar
+#: warmup`` prints them per line (``tests/cli/test_warmup.py`` compares the two); the documentation
+#: quotes their sum, :func:`kernel_count` (``tests/docs/test_quoted_numbers.py``)
+KERNELS = {
+    "periodic orbits, flexible bar": 44,
+    "periodic orbits, 40 modes and more": 14,
+    "periodic orbits, wave law": 28,
+    "simulation, rigid bar": 16,
+    "simulation, flexible bar": 6,
+    "simulation, wave law": 21,
+    "position-switched drive": 13,
+    "rod and rock": 79,
+    "rod and rock orbits, exact blows": 16,
+    "rod and rock orbits, lattice": 24,
+    "rigid sweep chunks": 27,
+    "oil circuit": 171,
+    "oil circuit on rod and rock": 24,
+    "piston optimiser": 11,
+}
+
+
+def kernel_count() -> int:
+    """The number of kernels ``impactbar warmup`` compiles into an empty cache, without compiling.
+
+    Returns
+    -------
+    int
+        The sum of :data:`KERNELS`: every kind of computation's kernels, the oil circuit's C callbacks
+        among them (with pint installed; without it the warm-up leaves the oil circuit out). Source:
+        ``docs/performance.md``, section "How to make it fast".
+    """
+    return sum(KERNELS.values())
 
 
 def _tasks():
@@ -154,13 +188,14 @@ def run(args) -> int:
 
 
 def _callbacks_compiled() -> int:
-    """How many of the oil circuit's C callbacks (``numba.cfunc``, compiled or loaded from the cache
-    when their module is imported, without numba's compile event) this process compiled."""
+    """How many C callbacks (``numba.cfunc``, compiled or loaded from the cache when their module is
+    imported, without numba's compile event) this process compiled: the oil circuit's own and those of
+    the modules generated for a network or a circuit on a rod and rock (``impactbar_netgen_...``,
+    ``impactbar_endgen_...``)."""
     import sys
 
-    module = sys.modules.get("impactbar.drives.circuit._cvode")
-    if module is None:
-        return 0
     from numba.core.ccallback import CFunc
 
-    return sum(1 for v in vars(module).values() if isinstance(v, CFunc) and v.cache_hits == 0)
+    modules = [m for name, m in list(sys.modules.items()) if name.startswith("impactbar") and m is not None]
+    return sum(1 for m in modules for v in list(vars(m).values())
+               if isinstance(v, CFunc) and v.cache_hits == 0)

@@ -266,7 +266,16 @@ def fig8_plot(data: dict, axes=None):
 
 def _save(fig, path: Path, *, dpi: int = 130) -> None:
     """Write the figure (its format from the suffix) and close it: the same last steps for every
-    figure."""
+    figure.
+
+    A PNG's constrained layout is made here, at the file's resolution, and the layout engine then
+    removed: matplotlib's ``savefig`` would otherwise draw the whole figure twice, once with its
+    drawing switched off only to run the layout, then for the file (the same pixels either way)."""
+    engine = fig.get_layout_engine()
+    if engine is not None and path.suffix == ".png":
+        fig.dpi = dpi  # (the layout's text extents at the file's resolution, as savefig measures them)
+        engine.execute(fig)
+        fig.set_layout_engine(None)
     fig.savefig(path, dpi=dpi)
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
