@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 
-__all__ = ["add_parser", "run", "KERNELS", "kernel_count"]
+__all__ = ["add_parser", "run", "KERNELS", "KERNELS_NUMBA", "kernel_count"]
 
 #: the kernels each first call of :func:`_tasks` compiles into an empty cache, by its label, in order:
 #: numba's compiles (one a kernel and signature) and the oil circuit's C callbacks, as ``impactbar
@@ -34,6 +34,10 @@ KERNELS = {
     "oil circuit on rod and rock": 24,
     "piston optimiser": 11,
 }
+
+#: the numba release (major.minor) :data:`KERNELS` was counted with: numba's compile events count the
+#: library's own overloads a kernel pulls in too, so another release may count a few more or fewer
+KERNELS_NUMBA = "0.68"
 
 
 def kernel_count() -> int:
