@@ -117,7 +117,7 @@ class Chambers:
         Raises
         ------
         ValueError
-            A chamber empties: ``the <which> chamber empties (V <= 0) <advice>``.
+            A chamber empties: the message names the chamber, then ``advice`` formatted.
 
         Examples
         --------
