@@ -11,7 +11,9 @@ to it already after a Newton step below :data:`CLOSING_HANDOVER` (that iterate's
 of the step's square). The multipliers' flight from the root then gives Newton's next step with
 the exact Jacobian; it must be below :data:`CLOSING_CHECK` times the tolerance, else it is taken
 and the flight flown again, so that the orbit returned is the root its own multipliers' flight
-confirms.
+confirms. Where the chord's plain flights are the root's (:func:`root_settings`), the motion followed
+to a start is handed over sooner (:func:`settle_handover`) and the chord's first step takes the
+steering flight's residual (:func:`first_residual`).
 """
 
 from __future__ import annotations
