@@ -11,19 +11,23 @@ to it already after a Newton step below :data:`CLOSING_HANDOVER` (that iterate's
 of the step's square). The multipliers' flight from the root then gives Newton's next step with
 the exact Jacobian; it must be below :data:`CLOSING_CHECK` times the tolerance, else it is taken
 and the flight flown again, so that the orbit returned is the root its own multipliers' flight
-confirms.
+confirms. Where the chord's plain flights are the root's (:func:`root_settings`), the motion followed
+to a start is handed over sooner (:func:`settle_handover`) and the chord's first step takes the
+steering flight's residual (:func:`first_residual`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from ..drives.orbitproblem import at_rounding_floor, step_size
 
-__all__ = ["CLOSING_HANDOVER", "LIFTED_HANDOVER", "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "close",
-           "checked_root", "root_settings"]
+__all__ = ["CLOSING_HANDOVER", "LIFTED_HANDOVER", "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS",
+           "ROOT_HANDOVER", "LOOSE_FIRST", "close", "checked_root", "root_settings", "settle_handover",
+           "first_residual"]
 
 #: The size of a Newton step (relative to the unknowns, as Newton's steps are measured) after which
 #: the chord hands a one-impact orbit over to its closing step (the preset ``circuit-drifter``'s first
@@ -48,6 +52,22 @@ CLOSING_CHECK = 0.1
 #: steps 12 did, and the preset's orbits take none of them (closing steps of 3e-8 to 5e-8).
 STEER_ERROR = 1e-3
 CLOSING_STEPS = 4
+#: How closely the impact velocities of the motion followed to a start agree, impact after impact,
+#: before the chord takes over where its plain flights are the orbit's root's (:func:`root_settings`),
+#: in place of the shooting problem's ``SETTLE_HANDOVER`` (1e-4): its first step then takes the
+#: steering flight's residual (:func:`first_residual`), a Newton step from a start this far off. The
+#: spool drill (``examples/circuit_drill_spool.toml``) from rest, its start carried to the relief
+#: valve's setting: from the second impact after, its impact velocities 5.3e-4, 1.4e-4 and 2.9e-5
+#: from the one before (each impact a period of 29 flights at the loose tolerance); handed over at the
+#: 1.4e-4, its orbit 1.3e-10 from one at ``rtol = 1e-12`` (as at the 2.9e-5); at the 5.3e-4 (1e-3)
+#: 3.0e-10, the chord's Jacobian taken that much farther from the root contracting its steps less.
+ROOT_HANDOVER = 3e-4
+#: The size of the steering flight's residual (relative to the unknowns, at least 1) above which the
+#: chord's first step takes it where its plain flights are the root's (:func:`first_residual`): ten
+#: times the loose flights' tolerance (``SETTLE_RTOL``, 1e-7), so that the first step, larger than
+#: the residual's error, never ends the chord at that residual's root (the chord's tolerance, 1e-9 at
+#: the drive's, being far below it); its next steps take the root's flights and correct that error.
+LOOSE_FIRST = 1e-6
 
 _UNSET = object()
 
@@ -76,6 +96,56 @@ def root_settings(problem):
         out = own.root_settings(problem.model, problem.settings) if wanted else None
         problem._root_settings = out
     return out
+
+
+def settle_handover(problem, default: float) -> float:
+    """How closely the impact velocities of the motion followed to a start of ``problem`` agree before
+    the chord takes over: :data:`ROOT_HANDOVER` where its plain flights are the orbit's root's
+    (:func:`root_settings`), else ``default`` (the shooting problem's own).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    default : float
+        The relative agreement otherwise (dimensionless).
+
+    Returns
+    -------
+    float
+    """
+    return ROOT_HANDOVER if root_settings(problem) is not None else default
+
+
+def first_residual(problem, X, steer, r):
+    """The residual the chord's first step takes at ``X`` from the steering flight with ``steer``
+    (``r`` that flight's; theory §11): ``r`` where that flight's state is the chord's plain flights'
+    (the preset's tolerances make it so) or where those flights are the root's
+    (:func:`root_settings`, the variational flights carrying the Jacobian) and ``r`` is above
+    :data:`LOOSE_FIRST` of the unknowns (its error, of the loose tolerance's order, taken out by the
+    chord's next steps: a plain period at the root's tolerance saved, some 5,200 CVODE steps on the
+    spool drill); else ``None`` (the chord flies it).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    X : numpy.ndarray, shape (m n,)
+        The chord's start.
+    steer : FlightSettings
+        The steering flight's integrator.
+    r : numpy.ndarray, shape (m n,)
+        That flight's residual at ``X``.
+
+    Returns
+    -------
+    numpy.ndarray or None
+    """
+    if root_settings(problem) is not None:
+        size = float(np.max(np.abs(r) / np.maximum(1.0, np.abs(X))))
+        return r if size > LOOSE_FIRST else None
+    plain = problem._state_settings(steer)  # (a plain flight reads no Magnus step)
+    own = plain is not None and dataclasses.replace(plain, magnus_theta=None) == \
+        dataclasses.replace(problem.settings, magnus_theta=None)
+    return r if own else None
 
 
 _SINGULAR = "find_orbit: the Jacobian of the periodic-orbit problem is singular at its root"

@@ -356,7 +356,7 @@ class ShootingProblem(OrbitProblem):
     def _settle(self, tau, mode, y, n_max, source=None):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
         impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
-        ``1e-4`` for a drive with variational flights; a drift too slow to tell at that tolerance
+        ``settle_handover``'s for a drive with variational flights; a drift too slow to tell at 1e-4
         carried to the switching surface ahead of it, :meth:`_carried`; ``m = 1``, variational: or
         every ``k > 1`` impacts, :func:`~._settling.other_period`, noted in ``settled_into``), and
         take the starts of the last ``m`` intervals as the blocks (with the impacts before them)."""
@@ -366,6 +366,7 @@ class ShootingProblem(OrbitProblem):
         # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
         # impacts to settle to 1e-11
         settle = SETTLE_HANDOVER if self.variational else 1e-11
+        agree = C.settle_handover(self, settle)  # (the impacts' agreement: the drift's tests keep settle)
         # and where one real multiplier is left (the supply's), its mode is extrapolated away (Aitken's
         # delta-squared on the map's iterates, as in Steffensen's method; the quadratic's fixed point
         # where the steps' multiple still falls: dominant_limit) instead of followed
@@ -388,7 +389,7 @@ class ShootingProblem(OrbitProblem):
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
                                  "without one) does not strike the stop: give a guess")
             if n_max > m and len(speeds) > 2 * m + 2 and \
-                    abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
+                    abs(speeds[-1] - speeds[-1 - m]) <= agree * max(1.0, abs(speeds[-1])):
                 ahead = y + DRIFT_AHEAD * (y - hist[-1 - m].y)  # (where the drift takes it next)
                 if not (self.variational and (drifting(hist[-1 - 2 * m].y, hist[-1 - m].y, y, settle)
                                               or not surfaces_ahead(self.drive, mode, ahead, M))):
@@ -403,8 +404,9 @@ class ShootingProblem(OrbitProblem):
             elif other and (k := other_period(speeds, settle)):
                 self.settled_into = (k, count)
                 break
-            if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode == hist[-4].mode:
-                star = dominant_limit(hist[-4].y, hist[-3].y, hist[-2].y, y)
+            # (the last three iterates in one mode, the drift carried in it; Aitken's limit the four)
+            if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode:
+                star = dominant_limit(*(h.y for h in hist[-4:])) if mode == hist[-4].mode else None
                 if star is None:  # (steps that grow: no limit ahead, the drift carried to a surface)
                     star = expanding_to_surface(self.drive, mode, hist[-4].y, hist[-3].y, hist[-2].y, y, M)
                 if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
@@ -520,15 +522,13 @@ class ShootingProblem(OrbitProblem):
 
     def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):
         """:meth:`solve`'s chord from ``X``: the steering Jacobian of a variational flight at
-        ``SETTLE_RTOL`` (its residual the chord's first where that flight's state is the plain flights',
-        as the preset's tolerances make it), the plain flights' root (with ``handover``, the iterate
-        after a Newton step of at most that size) and the last Jacobian."""
+        ``SETTLE_RTOL`` (its residual the chord's first where :func:`._closing.first_residual` lets
+        it), the plain flights' root (with ``handover``, the iterate after a Newton step of at most that
+        size) and the last Jacobian."""
         steer = self._steer(self._loose())
         r, first = self.residual(X, settings=steer, steer=True)
-        plain = self._state_settings(steer)  # (a plain flight reads no Magnus step)
-        own = plain is not None and dataclasses.replace(plain, magnus_theta=None) == \
-            dataclasses.replace(self.settings, magnus_theta=None)
-        return self._chord(X, first, tol, max_iter, r if own else None, handover, first_here=True)
+        r = C.first_residual(self, X, steer, r)  # (the chord's first residual, where it may be this)
+        return self._chord(X, first, tol, max_iter, r, handover, first_here=True)
 
     def polish(self, rough: DrivenOrbit, tol: float, max_iter: int):
         """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion

@@ -1,0 +1,95 @@
+"""The spool drill's start for the chord (``examples/circuit_drill_spool.toml``, rigid piston): where the
+chord's plain flights are the orbit's root's (``_closing.root_settings``), the motion followed from
+rest is handed over at ``ROOT_HANDOVER`` and the chord's first step takes the steering flight's
+residual (``_closing.first_residual``), so that two periods at the loose tolerance and one plain
+period at the root's tolerance are not flown; the orbit stays within its root tolerance of the one
+found the way before and as near one at ``rtol = 1e-12``."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import impactbar.drives.circuit.flight as FL
+import impactbar.orbits._closing as C
+import impactbar.orbits.shooting as S
+from impactbar import find_orbit
+from impactbar.drives.circuit.settings import CircuitFlightSettings, circuit_settings
+from impactbar.physical import circuit_preset, load
+
+SPOOL = Path(__file__).resolve().parents[2] / "examples" / "circuit_drill_spool.toml"
+
+
+@pytest.fixture(scope="module")
+def spool():
+    d = load(SPOOL)
+    return d.model(), d.drive()
+
+
+def _counted(monkeypatch, model, drive):
+    """The orbit, the impacts followed to its start and the chord's plain flights at the root's
+    tolerance (``drive.root_settings``)."""
+    rtol = drive.root_settings(model).rtol
+    impacts, fine = [0], [0]
+    follow, flight = S.ShootingProblem._follow, FL.circuit_flight
+
+    def followed(self, *args):
+        impacts[0] += 1
+        return follow(self, *args)
+
+    def flown(*args, **kwargs):
+        settings = kwargs.get("settings", args[7] if len(args) > 7 else None)
+        variational = kwargs.get("variational", args[8] if len(args) > 8 else False)
+        if not variational and circuit_settings(settings).rtol == rtol:
+            fine[0] += 1
+        return flight(*args, **kwargs)
+
+    monkeypatch.setattr(S.ShootingProblem, "_follow", followed)
+    monkeypatch.setattr(FL, "circuit_flight", flown)
+    orbit = find_orbit(model, drive)
+    monkeypatch.undo()
+    return orbit, impacts[0], fine[0]
+
+
+def test_the_spool_drill_hands_over_two_impacts_sooner_and_flies_one_fine_period(spool, monkeypatch):
+    """From rest: 8 impacts followed (its supply pressure carried to the relief valve's setting at the
+    fifth, where the check valve's flag of the two first impacts no longer stops it; then three) and
+    one plain period at the root's tolerance (29 flights), where the way before (the hand-over at
+    ``SETTLE_HANDOVER``, the chord's first residual a flight of its own: measured 10 impacts and 58
+    flights on main) flew more. The two orbits within the root's tolerance (1e-9 of the unknowns;
+    measured 1.7e-11, and 2.8e-10 in the multipliers), each as near an orbit at ``rtol = 1e-12``
+    (measured 1.3e-10 and 1.1e-10)."""
+    model, drive = spool
+    orbit, impacts, fine = _counted(monkeypatch, model, drive)
+    assert impacts <= 8
+    assert fine == 29
+    monkeypatch.setattr(C, "ROOT_HANDOVER", S.SETTLE_HANDOVER)
+    monkeypatch.setattr(C, "LOOSE_FIRST", np.inf)
+    before = find_orbit(model, drive)
+    monkeypatch.undo()
+    X, Xb = np.asarray(orbit._unknowns), np.asarray(before._unknowns)
+    assert np.max(np.abs(X - Xb) / np.maximum(np.abs(Xb), 1e-2)) < 1e-9
+    np.testing.assert_allclose(np.sort_complex(orbit.multipliers), np.sort_complex(before.multipliers),
+                               rtol=0, atol=5e-9)
+    ref = find_orbit(model, drive, settings=CircuitFlightSettings(rtol=1e-12, atol=1e-14))
+    R = np.asarray(ref._unknowns)
+    for Y in (X, Xb):
+        assert np.max(np.abs(Y - R) / np.maximum(np.abs(R), 1e-2)) < 1.7e-10
+
+
+def test_the_first_residual_is_the_steering_flights_only_where_the_chord_flies_the_roots(spool):
+    """``first_residual``: on the spool drill the steering flight's residual where it is above
+    ``LOOSE_FIRST`` of the unknowns (and ``None`` below: the chord's tolerance far under its error);
+    on the preset's rigid piston never (its steering flight's state is not its plain flights')."""
+    model, drive = spool
+    problem = S.ShootingProblem(model, drive)
+    X = np.ones(problem.n)
+    steer = problem._steer(problem._loose())
+    r = np.full(problem.n, 10.0 * C.LOOSE_FIRST)
+    assert C.first_residual(problem, X, steer, r) is r
+    assert C.first_residual(problem, X, steer, 0.1 * r) is None
+    d = circuit_preset("circuit-drifter")
+    preset = S.ShootingProblem(d.model().with_(n_modes=0), d.drive())
+    assert C.first_residual(preset, X[:preset.n], preset._steer(preset._loose()), r[:preset.n]) is None
+    assert C.settle_handover(preset, S.SETTLE_HANDOVER) == S.SETTLE_HANDOVER
+    assert C.settle_handover(problem, S.SETTLE_HANDOVER) == C.ROOT_HANDOVER
