@@ -191,3 +191,104 @@ def test_borrowed_arguments_keep_every_count():
     assert (sys.getrefcount(x), sys.getrefcount(y)) == before
     z = ns["same"](np.arange(3.0))  # (the only reference left: the kernel's result's)
     assert z.tolist() == [0.0, 1.0, 2.0]
+
+
+_BORROW_TUPLE = '''
+import re
+import numba
+import numpy as np
+from impactbar._shared.wrappers import internal_kernels
+
+
+@numba.njit
+def pick(ws):
+    a, b = ws
+    c = ws[-1]
+    s = 0.0
+    for i in range(a.size):
+        s += a[i] + b[i]
+    return s + c[1]
+
+
+internal_kernels(globals(), python=("pick",))
+pick((np.arange(3.0), np.arange(3.0)))
+ir = pick.inspect_llvm(pick.signatures[0])
+names = [f.split("(")[0] for f in ir.split("define ")[1:]]
+(own,) = [f for f, n in zip(ir.split("define ")[1:], names) if "pick" in n and "cpython" not in n]
+print(len(re.findall(r"NRT_incref\\(", own)), len(re.findall(r"NRT_decref\\(", own)))
+'''
+
+
+def test_a_kernel_borrows_the_elements_of_a_tuple_it_is_given(tmp_path):
+    """The arrays unpacked from a tuple argument, or taken from it by index, take no reference of
+    their own: the kernel's code before LLVM's optimisation (``NUMBA_OPT=0``) counts nothing up or
+    down (numba's counts the tuple unpacked, and each element, up and down again)."""
+    env = dict(os.environ, NUMBA_OPT="0", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    out = subprocess.run([sys.executable, "-c", _BORROW_TUPLE], env=env, check=True, capture_output=True,
+                         text=True)
+    assert out.stdout.split() == ["0", "0"]
+
+
+def _elements():
+    """Kernels that return an element of a tuple argument, store it into a new tuple they return,
+    hand it and a slice of it to a link-only callee, and bind an element again."""
+
+    @numba.njit
+    def total(x):
+        s = 0.0
+        for v in x:
+            s += v
+        return s
+
+    @numba.njit
+    def first(ws):
+        a, _ = ws
+        return a
+
+    @numba.njit
+    def swapped(ws):
+        a, b = ws
+        return b, a
+
+    @numba.njit
+    def sums(ws, n):
+        a, b = ws
+        s = 0.0
+        for i in range(n):
+            c = ws[1]  # (bound at each pass, used in another block)
+            if i > 0:
+                s += total(c[i:])
+            s += total(a) + total(b[:i])
+        return s + total(c)
+
+    @numba.njit
+    def rebound(ws, n):
+        a, b = ws
+        if n > 0:
+            a = a[n:]  # (bound again: then its own reference, at either binding)
+        return a, total(a) + total(b)
+
+    return {"__name__": total.py_func.__module__, "total": total, "first": first, "swapped": swapped,
+            "sums": sums, "rebound": rebound}
+
+
+def test_borrowed_elements_keep_every_count():
+    """Each array's count as before the calls, after many, and an element returned, alone or in a
+    new tuple, is the caller's own (kept alive after the tuple it came in is gone)."""
+    ns = _elements()
+    internal_kernels(ns, python=("first", "swapped", "sums", "rebound"))
+    x, y = np.arange(4.0), np.arange(6.0)
+    before = sys.getrefcount(x), sys.getrefcount(y)
+    for _ in range(1000):
+        assert ns["sums"]((x, y), 3) == 3 * 6.0 + (15.0 + 14.0) + (0.0 + 0.0 + 1.0) + 15.0
+        for n in (0, 1):
+            r, s = ns["rebound"]((x, y), n)
+            assert r.size == 4 - n and s == 6.0 + 15.0 and np.shares_memory(r, x)
+        assert np.shares_memory(ns["first"]((x, y)), x)
+        b, a = ns["swapped"]((x, y))
+        assert np.shares_memory(a, x) and np.shares_memory(b, y)
+    del r, a, b
+    assert (sys.getrefcount(x), sys.getrefcount(y)) == before
+    z = ns["first"]((np.arange(3.0), np.arange(2.0)))  # (the only references left: the results')
+    b, a = ns["swapped"]((np.arange(3.0), np.arange(2.0)))
+    assert z.tolist() == a.tolist() == [0.0, 1.0, 2.0] and b.tolist() == [0.0, 1.0]
