@@ -25,10 +25,19 @@ import numpy as np
 
 from ..drives.orbitproblem import at_rounding_floor, step_size
 
-__all__ = ["CLOSING_HANDOVER", "LIFTED_HANDOVER", "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS",
-           "ROOT_HANDOVER", "LOOSE_FIRST", "close", "checked_root", "root_settings", "settle_handover",
-           "first_residual"]
+__all__ = ["SETTLE_HANDOVER", "SETTLE_LIFTED", "SETTLE_RTOL", "CLOSING_HANDOVER", "LIFTED_HANDOVER",
+           "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "ROOT_HANDOVER", "LOOSE_FIRST", "close",
+           "checked_root", "root_settings", "settle_handover", "first_residual"]
 
+#: How closely the impact velocities of the motion followed to a start agree, impact after impact,
+#: before Newton's method takes over (a drive whose flights integrate the variational equations).
+SETTLE_HANDOVER = 1e-4
+#: Impacts followed from the rigid piston's orbit, its modes at rest, to a flexible piston's Newton
+#: start where the drive's flights are variational (others settle as from rest).
+SETTLE_LIFTED = 3
+#: The integrator's relative tolerance while the motion is followed to a start for Newton (a drive
+#: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance).
+SETTLE_RTOL = 1e-7
 #: The size of a Newton step (relative to the unknowns, as Newton's steps are measured) after which
 #: the chord hands a one-impact orbit over to its closing step (the preset ``circuit-drifter``'s first
 #: steps with 4, 8 and 16 modes: 7.2e-5, 7.8e-5 and 7.7e-5, the iterates then some 3e-8 and 4e-8
@@ -54,7 +63,7 @@ STEER_ERROR = 1e-3
 CLOSING_STEPS = 4
 #: How closely the impact velocities of the motion followed to a start agree, impact after impact,
 #: before the chord takes over where its plain flights are the orbit's root's (:func:`root_settings`),
-#: in place of the shooting problem's ``SETTLE_HANDOVER`` (1e-4): its first step then takes the
+#: in place of :data:`SETTLE_HANDOVER` (1e-4): its first step then takes the
 #: steering flight's residual (:func:`first_residual`), a Newton step from a start this far off. The
 #: spool drill (``examples/circuit_drill_spool.toml``) from rest, its start carried to the relief
 #: valve's setting: from the second impact after, its impact velocities 5.3e-4, 1.4e-4 and 2.9e-5

@@ -23,7 +23,7 @@ from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..drives.orbitproblem import OrbitData, OrbitProblem, StalledIteration, chord, newton
 from ..model import BarModel
 from . import _closing as C
-from ._closing import checked_root, close
+from ._closing import SETTLE_HANDOVER, SETTLE_LIFTED, SETTLE_RTOL, checked_root, close
 from ._saltation import map_jacobian, through
 from ._settling import (
     DRIFT_AHEAD,
@@ -70,15 +70,6 @@ FD_STEP_CLOSED = 1e-6
 FD_STEP_ODE = 1e-4
 #: impacts followed from rest (or from a run's end) before Newton starts, at most
 SETTLE_IMPACTS = 400
-#: how closely the impact velocities of the motion followed to a start agree, impact after impact,
-#: before Newton's method takes over (a drive whose flights integrate the variational equations)
-SETTLE_HANDOVER = 1e-4
-#: impacts followed from the rigid piston's orbit, its modes at rest, to a flexible piston's Newton
-#: start where the drive's flights are variational (others settle as from rest; :meth:`initial`)
-SETTLE_LIFTED = 3
-#: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
-#: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
-SETTLE_RTOL = 1e-7
 #: the Magnus steps (``h ||A|| = theta``, :attr:`FlightSettings.magnus_theta`) of the variational
 #: flights whose Jacobian only steers Newton's method (the chord's, its closing step): four times the
 #: drive's own, a quarter of the steps (two squarings more each), the preset's first flight's Jacobian
