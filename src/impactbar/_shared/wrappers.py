@@ -19,16 +19,7 @@ each one (an array's pointers, sizes, shape and strides), to call the runtime on
 memory block; for the exact blow's workspace, a tuple of 26 arrays, some 300 LLVM instructions per
 count, about a third of its kernels' LLVM IR, all dead (LLVM deletes them). The lean lowering reads
 only the fields that hold a memory block, on the same path: the same calls to the runtime, in the
-same order, from less IR to build, print, parse and optimise. And they *borrow* their arguments:
-numba counts each array argument up on entry and down where its variable dies, atomic operations on
-its memory block that LLVM cannot drop where the same block is counted in between (a workspace's
-views in a loop), some 23 % of the exact blow's time (``perf``); the caller holds its reference for
-the whole call, so an argument never bound again is counted neither up nor down (the same blocks
-freed at the same points); and so is a variable bound once to an element of a borrowed tuple (a
-workspace unpacked, ``a, b = ws`` or ``a = ws[3]``), which the tuple holds for the whole call (a
-variable bound more than once, at a branch's join too, takes its own reference as before).
-numba's cache does not see a change here: a cache made before keeps its machine code (correct,
-with the counts) until its kernel's module changes or the cache is cleared.
+same order, from less IR to build, print, parse and optimise.
 """
 
 from __future__ import annotations
@@ -72,7 +63,7 @@ def _lean_compiler():
     only the fields of a value that hold a memory block to increment or decrement their counts."""
     import contextlib
 
-    from numba.core import debuginfo, ir, lowering, typed_passes
+    from numba.core import debuginfo, lowering, typed_passes
     from numba.core.compiler import Compiler
     from numba.core.compiler_machinery import register_pass
     from numba.core.runtime.context import NRTContext
@@ -93,47 +84,14 @@ def _lean_compiler():
             return found
 
     class LeanLower(lowering.Lower):
-        """numba's lowering, its reference counts through :class:`LeanNRT`, an argument never bound
-        again borrowed, and an element of a borrowed tuple never bound again (the module's
-        docstring): no reference of its own taken where it is bound, none given back where its
-        variable dies."""
-
-        def lower_assign(self, ty, inst):
-            value = inst.value
-            if inst.target.name in self._borrowed():
-                if isinstance(value, ir.Arg):
-                    return self.fnargs[value.index]  # (no reference taken: none given back)
-                if isinstance(value, ir.Var) or value.op == "exhaust_iter":  # (the tuple itself)
-                    return self.loadvar(value.name if isinstance(value, ir.Var) else value.value.name)
-                tup = self.loadvar(value.value.name)  # (static_getitem: the element, as numba's)
-                return self.builder.extract_value(tup, value.index % len(self.typeof(value.value.name)))
-            return super().lower_assign(ty, inst)
-
-        def storevar(self, value, name, argidx=None):
-            self._storing = name in self._borrowed()  # (a value before it: borrowed too, not given back)
-            try:
-                super().storevar(value, name, argidx=argidx)
-            finally:
-                self._storing = False
-
-        def delvar(self, name):
-            if name not in self._borrowed():
-                super().delvar(name)
-
-        def _borrowed(self):
-            """The variables that hold a borrowed value (this function's): an argument, a copy of a
-            borrowed variable, a borrowed tuple unpacked or one of its elements, each bound once
-            and holding a value with a memory block; none in a generator."""
-            if not hasattr(self, "_borrowed_vars"):
-                self._borrowed_vars = _borrowed_vars(self) if not self.generator_info else set()
-            return self._borrowed_vars
+        """numba's lowering, its reference counts through :class:`LeanNRT`."""
 
         def incref(self, typ, val):
             if self.context.enable_nrt:
                 LeanNRT(self.context, True).incref(self.builder, typ, val)
 
         def decref(self, typ, val):
-            if self.context.enable_nrt and not getattr(self, "_storing", False):
+            if self.context.enable_nrt:
                 with suspend(self.builder):  # (as numba's: no line of its own for a decref)
                     LeanNRT(self.context, True).decref(self.builder, typ, val)
 
@@ -159,50 +117,6 @@ def _lean_compiler():
             return pms
 
     return LeanCompiler
-
-
-def _borrowed_vars(lower) -> set:
-    """The variables of the function ``lower`` lowers that may borrow their value: bound once, to an
-    argument of their own type, or to a borrowed variable, its unpacking or one of its elements
-    (``static_getitem`` at a whole index) when it is a tuple, the value of the type the variable
-    has; each holding a memory block. Found from the whole function before any of it is lowered,
-    so that no variable is counted down before its binding says it is borrowed."""
-    from numba.core import ir, types
-
-    assigns = [inst for block in lower.func_ir.blocks.values() for inst in block.body
-               if isinstance(inst, ir.Assign)]
-    bound: dict = {}
-    for inst in assigns:
-        bound[inst.target.name] = bound.get(inst.target.name, 0) + 1
-    dmm = lower.context.data_model_manager
-    borrowed: set = set()
-    grew = True
-    while grew:
-        grew = False
-        for inst in assigns:
-            name, value = inst.target.name, inst.value
-            if name in borrowed or bound[name] != 1:
-                continue
-            ty = lower.typeof(name)
-            if not dmm[ty].contains_nrt_meminfo():
-                continue
-            if isinstance(value, ir.Arg):
-                ok = lower.typeof("arg." + value.name) == ty
-            elif isinstance(value, ir.Var):
-                ok = value.name in borrowed and lower.typeof(value.name) == ty
-            elif isinstance(value, ir.Expr) and value.op in ("exhaust_iter", "static_getitem") and \
-                    value.value.name in borrowed:
-                tupty = lower.typeof(value.value.name)
-                ok = isinstance(tupty, types.BaseTuple) and (
-                    tupty == ty if value.op == "exhaust_iter" else
-                    isinstance(value.index, int) and -len(tupty) <= value.index < len(tupty)
-                    and tupty[value.index] == ty)
-            else:
-                ok = False
-            if ok:
-                borrowed.add(name)
-                grew = True
-    return borrowed
 
 
 def _link_only_classes():
