@@ -201,7 +201,8 @@ DRILL_ROWS = (("rigid orbit CPU s, preset", 0), ("rigid orbit CPU s, example dri
 def print_drill(reps=3, against=None, rounds=2):
     """The drills' rows: the orbits' CPU seconds, then each ratio against :data:`DRILL_GOAL`; with
     ``against`` (a git ref, or a package tree's ``src`` folder) the same rows of that tree beside
-    this one's, each tree in fresh processes (``rounds`` each, alternately; the best of them)."""
+    this one's, each tree in fresh processes (``rounds`` each, alternately; the best of them, and the
+    ratios of the best times)."""
     if against is None:
         columns = [drill_rows(reps)]
         print(f"{'case':38s} {'this tree':>10s}")
@@ -210,7 +211,12 @@ def print_drill(reps=3, against=None, rounds=2):
 
         src = against if Path(against).is_dir() else ref_tree(against)
         runs = fresh_runs(__file__, src, rounds, ["--drill"])
-        columns = [[min(r[k] for r in runs[name]) for k in range(5)] for name in ("baseline", "new")]
+        # each tree's best times, and the ratios of those bests (not the best of the processes' ratios,
+        # which pairs one process's fast preset with another's fast drill)
+        columns = []
+        for name in ("baseline", "new"):
+            p, drill, spool = (min(r[k] for r in runs[name]) for k in range(3))
+            columns.append([p, drill, spool, drill / p, spool / p])
         name = "before" if Path(against).is_dir() else against[:10]
         print(f"{'case (best of ' + str(rounds) + ' processes)':38s} {name:>10s} {'this tree':>10s}")
     for label, k in DRILL_ROWS:
