@@ -158,6 +158,41 @@ def test_a_constraint_within_the_search_resolution_is_active():
         certify([1.0, 1.0], [[-1.0, -1.0]], rec, [0.5, 0.5], ["a", "b"], method="exact", resolution=-1.0)
 
 
+def _branches(v, drop: float) -> dict:
+    """A design's fresh figures on a function with a jump: ``f = u0 + u1`` and the scaled margin
+    ``c = 1 - u0 - u1`` smooth, both less ``drop`` past ``u0 = 0.3`` (another branch)."""
+    jump = drop if v[0] > 0.3 else 0.0
+    return {"ok": True, "values": {"a": float(v[0]), "b": float(v[1])},
+            "objectives": {"f": float(v[0] + v[1] - jump)},
+            "constraints": {"c": {"scaled": float(1.0 - v[0] - v[1] - jump)}}}
+
+
+def test_a_jump_in_the_figures_of_a_design_within_the_search_s_last_step_is_a_border():
+    """At ``u = (0.2995, 0.2)`` (no constraint active: KKT residual 1) a design of the search 1e-3
+    away lies past a jump of 0.01 in the objective and the margin: 0.01 against the 1e-3 the gradient
+    predicts, 7 times the most it lets them change over that step (sqrt 2 times 1e-3); a border, not
+    "not stationary". A smooth neighbour (no jump, or the same jump 0.005 beyond the search's reach
+    of twice its last step 2e-3) is none; nor are figures that differ by the orbits' accuracy."""
+    scaling, u = (np.zeros(2), np.ones(2)), np.array([0.2995, 0.2])
+    rec, blow = _branches(u, 0.0), (lambda v: _branches(v, 0.01))
+    history = [rec, _branches(u + [1e-3, 0.0], 0.01), _branches(u - [1e-3, 0.0], 0.01)]
+    cert = certify_search(rec, history, ["a", "b"], scaling, _Stopped, 2e-3, "f", blow, None)
+    assert cert.residual == pytest.approx(1.0, abs=1e-6) and cert.verdict == "stopped at a border"
+    assert cert.border.startswith("a jump: the objective changes by -0.009 over 0.001 (scaled) where its "
+                                  "gradient predicts 0.001")
+    assert "; figures jump beyond: a jump: the objective" in str(cert)
+    smooth = [rec, _branches(u + [1e-3, 0.0], 0.0), _branches(u + [5e-3, 0.0], 0.01)]
+    cert = certify_search(rec, smooth, ["a", "b"], scaling, _Stopped, 2e-3, "f", blow, None)
+    assert cert.verdict == "not stationary" and cert.border == ""
+    # (a neighbour 1e-7 away whose figures differ by 1e-9 relative from the gradient's: noise)
+    noisy = _branches(u + [1e-7, 0.0], 0.0)
+    noisy["objectives"]["f"] *= 1.0 + 1e-9
+    cert = certify_search(rec, [rec, noisy], ["a", "b"], scaling, _Stopped, 2e-3, "f", blow, None)
+    assert cert.verdict == "not stationary"
+    with pytest.raises(ValueError, match="objective: the design's objective must be given with neighbours"):
+        certify([1.0, 1.0], [[-1.0, -1.0]], rec, u, ["a", "b"], method="exact", neighbours=history)
+
+
 def test_a_variable_within_the_search_resolution_of_its_bound_is_at_it():
     """``u0`` 5e-4 under its upper bound, the objective ``u0`` alone: at the bound within COBYLA's
     last step 2e-3, its multiplier the whole gradient."""

@@ -8,10 +8,10 @@ import re
 
 import numpy as np
 import pytest
-from drifter_optimum import EXAMPLE, SEARCHED, collar
+from drifter_optimum import BUZZING, EXAMPLE, SEARCHED, collar
 
 from impactbar.orbits import coupled
-from impactbar.physical import build, read_config, settle, with_values
+from impactbar.physical import CircuitDrifter, build, read_config, settle, with_values
 from impactbar.physical.optimize_cache import dumps
 from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, _design_record
 from impactbar.physical.optimize_failures import (
@@ -165,6 +165,46 @@ def test_the_searched_design_s_record_says_the_two_blow_cycle_that_simulate_from
     # the record's cycle (its last two of 160 blows) is that cycle, still settling by 5e-6
     assert motion["impact_velocity"] == pytest.approx(np.mean(v[-2:]), rel=2e-5)
     assert motion["impact_velocity_spread"] == pytest.approx(np.std(v[-2:]), rel=1e-3)
+
+
+def test_a_design_whose_piston_buzzes_on_the_shank_is_classified_in_a_bounded_number_of_impacts(monkeypatch):
+    """A design the restarts' benchmark met (BUZZING: a front annulus of 0.39 mm^2): no one-impact orbit;
+    from rest two blows, then the piston buzzes on the shank, every impact a coupled contact with the
+    rock. Its classification runs once, to its impacts' bound (4 a blow wanted: 160), and says it
+    stalls, where it ran from rest 1 s, then 16 s (some 11,000 impacts), then more: over 16 minutes.
+    Checked against a run of simulate from rest of the same length, without the bound."""
+    cfg, folder = read_config(EXAMPLE)
+    rec = _design_record(BUZZING, cfg, folder, dict(DEFAULT_CONSTRAINTS, mean_supply_pressure=None))
+    assert rec["ok"] is False and "no periodic orbit" in rec["error"]
+    assert "front chamber empties" in rec["error"]
+    runs, simulate, bound = [], CircuitDrifter.simulate, 4 * MOTION_BLOWS
+
+    def counted(self, duration_s, **kwargs):
+        # (refused once the bound is spent: without it the classification does not return)
+        assert sum(n for _, n in runs) < bound, runs
+        out = simulate(self, duration_s, **kwargs)
+        runs.append((duration_s, out["impact_times_s"].size))
+        return out
+
+    with monkeypatch.context() as m:
+        m.setattr(CircuitDrifter, "simulate", counted)
+        motion = classify_failed(rec, build(with_values(cfg, BUZZING), folder))["motion"]
+    assert settle.SETTLE_IMPACTS_PER_BLOW * MOTION_BLOWS == bound
+    assert runs == [(MOTION_BLOWS / settle.SETTLE_FIRST_HZ, bound)]
+    assert (motion["n_blows"], motion["n_impacts"], motion["period_blows"]) == (2, 160, 0)
+    assert rec["motion_summary"] == ("stalls: 2 blows from rest, then 158 chatter impacts to "
+                                     f"{motion['simulated_time']:.3g} s, under two blows in its second half")
+    assert f'"{rec["motion_summary"]}"' in _page()  # (quoted there)
+    # what the drill does there, by simulate from rest to the classification's end (no bound): as many
+    # 160 impacts, two blows, then a buzz: impacts under 1 % of the first blow's velocity, at a steady
+    # interval (to 1 %, under 2 ms: above 500 a second)
+    # (to half a millisecond past it, a third of the buzz's interval)
+    run = build(with_values(cfg, BUZZING), folder).simulate(motion["simulated_time"] + 5e-4, histories=False)
+    t, v = run["impact_times_s"], run["impact_velocities_m_s"]
+    assert t.size == 160 and t[-1] == pytest.approx(motion["simulated_time"], rel=1e-8)
+    assert np.all(v[:2] >= 0.25 * v[0]) and np.all(v[2:] < 0.25 * v[0])
+    late, gaps = v[-100:], np.diff(t[-101:])
+    assert np.all(late < 0.01 * v[0]) and np.ptp(gaps) <= 0.01 * gaps.mean() and gaps.mean() < 2e-3
 
 
 _NO_ORBIT = "find_orbit found no periodic orbit of the drive with one impact per period; tried"

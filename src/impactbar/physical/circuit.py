@@ -323,9 +323,11 @@ class CircuitDrifter(_ScaledDrifter):
         return point
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0,
-                 histories: bool = True):
+                 histories: bool = True, max_impacts: int | None = None):
         """Simulate from the piston at rest on the stop (or a given gap and velocity), the circuit at
-        its start pressures, for ``duration_s`` (:func:`impactbar.simulate`).
+        its start pressures, for ``duration_s`` (:func:`impactbar.simulate`), or until its
+        ``max_impacts``-th impact (an integer of at least 1; default no bound: the settle task's runs,
+        :func:`~impactbar.physical.settle.settle_run`, are bounded so).
 
         Returns
         -------
@@ -347,7 +349,7 @@ class CircuitDrifter(_ScaledDrifter):
 
         dur, L, om, start = _rigid_start(self, duration_s, start_gap_m, start_velocity_m_s)
         drive = self.drive()
-        run = simulate(self.model(), drive, start, dur * om, histories=histories)
+        run = simulate(self.model(), drive, start, dur * om, histories=histories, max_impacts=max_impacts)
         _refuse_cavitation(_least_pressures(run.pieces), f"the run of {dur:g} s")
         hist = None
         if histories:

@@ -19,6 +19,13 @@ final trust radius, ``tol``): a constraint whose margin is within what one such 
 :math:`c_i(u) \le \rho\,\lVert\nabla c_i\rVert`, is one the search cannot tell from active, and
 counts as active (as does a variable within :math:`\rho` of a bound), besides the fixed band
 :data:`ACTIVE_TOLERANCE`.
+
+A search stopped next to a border where a design of it within twice its last step has no orbit, or
+where the figures of one with an orbit jump: the objective or a scaled margin departs from the
+gradient's prediction :math:`\nabla h \cdot \delta` by more than :data:`JUMP_RATIO` times the
+most the gradient lets it change over that step, :math:`\lVert\nabla h\rVert\,\lVert\delta\rVert`
+(a smooth figure would need its gradient to change by several times its own size within the step:
+another branch of the orbit, the designs beyond it missing a constraint the gradient says they meet).
 """
 
 from __future__ import annotations
@@ -28,8 +35,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["KKT_TOLERANCE", "ACTIVE_TOLERANCE", "DIFFERENCE_STEP", "OptimalityCertificate", "certify",
-           "central_gradients", "stopped_at_budget", "certify_search"]
+__all__ = ["KKT_TOLERANCE", "ACTIVE_TOLERANCE", "DIFFERENCE_STEP", "JUMP_RATIO", "JUMP_FLOOR",
+           "OptimalityCertificate", "certify", "central_gradients", "stopped_at_budget", "certify_search"]
 
 #: The largest relative KKT residual of a design certified ``"converged"``: the search's own last step
 #: (COBYLA's ``tol``, 2e-3 by default, in the scaled variables) leaves the gradient's projection some
@@ -46,6 +53,15 @@ ACTIVE_TOLERANCE = 1e-4
 #: ``step ** 2``; one-sided, of order ``step``, at a bound).
 DIFFERENCE_STEP = 1e-4
 
+#: A figure of a neighbouring design (within the search's reach) jumps where it departs from its
+#: gradient's prediction by more than this times the gradient's norm times the distance (module
+#: docstring).
+JUMP_RATIO = 3.0
+
+#: ... and by more than this times the larger of the two figures' sizes: far above the orbits'
+#: accuracy (a continued and a fresh orbit of one design differ by some 1e-9 relative).
+JUMP_FLOOR = 1e-6
+
 _VERDICTS = ("converged", "stopped at a budget", "stopped at a border", "not stationary", "infeasible")
 
 
@@ -58,10 +74,10 @@ class OptimalityCertificate:
     verdict : str
         ``"converged"`` (the KKT residual below :data:`KKT_TOLERANCE`, the multipliers non-negative
         by construction), else ``"stopped at a budget"`` (the search ran out of evaluations or
-        iterations), ``"stopped at a border"`` (a design of the search next to it had no orbit:
-        ``border`` says which), or ``"not stationary"``; ``"infeasible"`` where the design misses a
-        constraint (``record["feasible"]`` false: a search that found no feasible design), whatever
-        its residual.
+        iterations), ``"stopped at a border"`` (a design of the search next to it had no orbit, or
+        its figures jump: ``border`` says which), or ``"not stationary"``; ``"infeasible"`` where
+        the design misses a constraint (``record["feasible"]`` false: a search that found no
+        feasible design), whatever its residual.
     residual : float
         The KKT residual: the projected gradient's norm over the objective's gradient's (module
         docstring).
@@ -83,8 +99,9 @@ class OptimalityCertificate:
     budget : bool
         Whether the search stopped at its budget of evaluations or iterations.
     border : str
-        The error of the nearest design without an orbit within the search's last step (``""`` where
-        none).
+        The error of the nearest design without an orbit within twice the search's last step, else
+        the largest jump of a figure to a design with one there (:data:`JUMP_RATIO`; ``""`` where
+        neither).
     tolerance : float
         :data:`KKT_TOLERANCE`.
     """
@@ -119,7 +136,8 @@ class OptimalityCertificate:
         lam = ", ".join(f"{k} {v:.3g}" for k, v in self.multipliers.items())
         text = (f"{self.verdict}: KKT residual {self.residual:.2g} (tolerance {self.tolerance:g}); active: "
                 f"{active or 'none'}" + (f"; multipliers {lam}" if lam else ""))
-        return text + (f"; no orbit beyond: {self.border}" if self.border else "")
+        beyond = "figures jump" if self.border.startswith(_JUMP) else "no orbit"
+        return text + (f"; {beyond} beyond: {self.border}" if self.border else "")
 
 
 def stopped_at_budget(result) -> bool:
@@ -169,9 +187,36 @@ def central_gradients(point, u, step: float = DIFFERENCE_STEP) -> tuple:
     return objective, np.array(constraints).reshape(-1, u.size), method
 
 
+_JUMP = "a jump: "
+
+
+def _jump(u, own, gradients, neighbours, names: list, reach: float) -> str:
+    """The largest jump of a figure (``own``, shape (1 + m,): the objective, the scaled margins, with
+    their ``gradients``, shape (1 + m, n)) to a design of ``neighbours`` ((scaled variables, figures))
+    within ``reach``: text naming it, ``""`` where none (module docstring)."""
+    worst, text = 0.0, ""
+    for v, figures in neighbours:
+        delta = np.asarray(v, dtype=float) - u
+        d = float(np.linalg.norm(delta))
+        if not 0.0 < d <= reach:
+            continue
+        change = np.asarray(figures, dtype=float) - own
+        predicted = gradients @ delta
+        off = np.abs(change - predicted)
+        bound = np.maximum(JUMP_RATIO * np.linalg.norm(gradients, axis=1) * d,
+                           JUMP_FLOOR * np.maximum(np.abs(own), np.abs(np.asarray(figures, dtype=float))))
+        for i in np.flatnonzero(off > bound):
+            ratio = off[i] / bound[i]
+            if ratio > worst:
+                worst = ratio
+                text = (f"{_JUMP}{names[i]} changes by {change[i]:.3g} over {d:.3g} (scaled) where its "
+                        f"gradient predicts {predicted[i]:.3g}")
+    return text
+
+
 def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, method: str,
             budget: bool = False, failed=(), reach: float = 0.0,
-            resolution: float = 0.0) -> OptimalityCertificate:
+            resolution: float = 0.0, neighbours=(), objective: float | None = None) -> OptimalityCertificate:
     """The first-order certificate of a design (module docstring).
 
     Parameters
@@ -193,15 +238,28 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     failed : sequence of (array_like, str)
         The designs of the search without an orbit: scaled variables and error.
     reach : float
-        How near (scaled, Euclidean) a failed design counts as a border next to this one.
+        How near (scaled, Euclidean) a failed design, or one whose figures jump, counts as a border
+        next to this one.
     resolution : float
         The search's last step in the scaled variables (not negative; 0: the fixed band alone): a
         constraint whose scaled margin is at most ``resolution`` times its gradient's norm is active,
         and a variable within ``resolution`` of a bound at it (module docstring).
+    neighbours : sequence of (array_like, array_like)
+        The designs of the search with an orbit: scaled variables, shape (n,), and figures, shape
+        (1 + m,): the objective and the scaled margins in the order of ``record["constraints"]``;
+        one within ``reach`` whose figure jumps (:data:`JUMP_RATIO`) marks a border.
+    objective : float, optional
+        The design's objective (with ``neighbours``, where they are given).
 
     Returns
     -------
     OptimalityCertificate
+
+    Raises
+    ------
+    ValueError
+        ``resolution`` negative or not finite, a gradient not finite, or ``neighbours`` without
+        ``objective``.
 
     Examples
     --------
@@ -238,6 +296,11 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     distance, error = min(((float(np.linalg.norm(np.asarray(v) - u)), e) for v, e in failed),
                           default=(math.inf, ""))
     border = error if distance <= reach else ""
+    if not border and len(neighbours):
+        if objective is None:
+            raise ValueError("objective: the design's objective must be given with neighbours")
+        own = np.array([objective, *(record["constraints"][n]["scaled"] for n in names)], dtype=float)
+        border = _jump(u, own, np.vstack([g, G]), neighbours, ["the objective", *names], reach)
     verdict = ("infeasible" if not record.get("feasible", True) else
                "converged" if residual <= KKT_TOLERANCE else "stopped at a budget" if budget
                else "stopped at a border" if border else "not stationary")
@@ -257,7 +320,8 @@ def certify_search(record: dict, history: list, keys: list, scaling: tuple, resu
     record : dict
         The reported design's fresh record (``values`` in SI by dotted key).
     history : list of dict
-        The search's designs (those without an orbit, ``ok`` false, mark a border).
+        The search's designs (those without an orbit, ``ok`` false, mark a border, as do those with
+        one whose figures jump: :func:`certify`'s ``neighbours``).
     keys : list of str
         The variables.
     scaling : tuple of numpy.ndarray
@@ -292,7 +356,13 @@ def certify_search(record: dict, history: list, keys: list, scaling: tuple, resu
         (g, G), method = design_gradient(), ("implicit-function-theorem sensitivities of the orbit "
                                              "(tangent_derivatives, the step refined till two agree; central "
                                              "differences of continued orbits across a border)")
-    failed = [((np.array([r["values"][k] for k in keys]) - lo) / span, r["error"]) for r in history
-              if not r.get("ok") and "values" in r]
+    def scaled(r):
+        return (np.array([r["values"][k] for k in keys]) - lo) / span
+
+    failed = [(scaled(r), r["error"]) for r in history if not r.get("ok") and "values" in r]
+    names = list(record["constraints"])
+    neighbours = [(scaled(r), [r["objectives"][fkey], *(r["constraints"][n]["scaled"] for n in names)])
+                  for r in history if r.get("ok") and "values" in r]
     return certify(g, G, record, u, keys, method=method, budget=stopped_at_budget(result), failed=failed,
-                   reach=2.0 * tol, resolution=tol if resolution is None else resolution)
+                   reach=2.0 * tol, resolution=tol if resolution is None else resolution,
+                   neighbours=neighbours, objective=record["objectives"][fkey])

@@ -15,6 +15,8 @@ classified (:func:`classify_listed`), the others' records say they are not
 
 from __future__ import annotations
 
+import math
+
 __all__ = ["ERROR_CHARS", "MOTION_BLOWS", "MOTION_MOST_BLOWS", "FAILED_ROWS", "NOT_CLASSIFIED",
            "failed_record", "classify_failed", "classify_listed", "listed_failures", "motion_summary",
            "design_text", "failures_table"]
@@ -199,9 +201,16 @@ def motion_summary(motion: dict) -> str:
     >>> motion_summary({"period_blows": 0, "chatter_per_blow": 1.5, "blow_frequency": 40.0,
     ...                 "impact_velocity": 7.0, "n_blows": 40})
     'not settled in 40 blows, 1.5 chatter impacts per blow, 40 Hz, 7 m/s'
+    >>> motion_summary({"period_blows": 0, "n_blows": 2, "n_impacts": 160, "simulated_time": 0.531,
+    ...                 "blow_frequency": float("nan")})
+    'stalls: 2 blows from rest, then 158 chatter impacts to 0.531 s, under two blows in its second half'
     """
     if "error" in motion:
         return f"no motion from rest: {motion['error']}"
+    if math.isnan(motion["blow_frequency"]):  # (fewer than two blows in the run's second half)
+        n = motion["n_blows"]
+        return (f"stalls: {n or 'no'} blow{'' if n == 1 else 's'} from rest, then {motion['n_impacts'] - n} "
+                f"chatter impacts to {motion['simulated_time']:.3g} s, under two blows in its second half")
     m = motion["period_blows"]
     # (the spread of the cycle's impact velocities: their standard deviation over their mean)
     spread = (f", {100.0 * motion['impact_velocity_spread'] / motion['impact_velocity']:.2g} % spread"

@@ -8,7 +8,8 @@ import math
 
 import numpy as np
 
-__all__ = ["SETTLE_FIRST_HZ", "SETTLE_GROWTH", "SETTLE_RUNS", "SETTLE_LONGEST", "settle_run", "settle_point"]
+__all__ = ["SETTLE_FIRST_HZ", "SETTLE_GROWTH", "SETTLE_RUNS", "SETTLE_LONGEST", "SETTLE_IMPACTS_PER_BLOW",
+           "settle_run", "settle_point"]
 
 #: a settle's first run lasts its blows at this blow frequency (Hz); a run holding fewer blows is
 #: followed by a longer one, from rest again
@@ -23,14 +24,31 @@ SETTLE_RUNS = 8
 #: run holds (without the bound, a design whose piston never struck ran 4 times longer each time: a
 #: drifter's 40 blows, 4096 s of its circuit in the seventh run)
 SETTLE_LONGEST = 16.0
+#: the most impacts a circuit drifter's run holds per blow wanted: the run ends at the last of them
+#: (:func:`impactbar.simulate`'s ``max_impacts``) and is classified by what it holds, a motion with
+#: more than ``SETTLE_IMPACTS_PER_BLOW - 1`` chatter impacts a blow. Each impact of a drifter on the
+#: rock is a coupled contact (some 40 ms of CPU, chatter as dear as a blow); without the bound, a
+#: design whose piston, after two blows, buzzes on the shank (700 impacts a second at 8 mm/s: a
+#: front annulus of 0.4 mm^2) ran 16 s of it, then runs of up to 64 s for 160 blows: more than 16
+#: minutes; bounded, 160 impacts, some 5 s
+SETTLE_IMPACTS_PER_BLOW = 4
 
 
-def _impacts(machine, duration_s: float):
-    """The impact times (s) and velocities (m/s) of ``machine.simulate(duration_s)`` from rest."""
+def _most_impacts(machine, blows: int) -> int | None:
+    """The most impacts a run of ``machine`` for ``blows`` blows holds (:data:`SETTLE_IMPACTS_PER_BLOW`
+    a blow for a circuit drifter; ``None``, no bound, for a valve drifter: its flights closed forms)."""
     from .circuit import CircuitDrifter
 
-    if isinstance(machine, CircuitDrifter):
-        run = machine.simulate(duration_s, histories=False)  # (the impacts alone: each blow summarised)
+    return SETTLE_IMPACTS_PER_BLOW * blows if isinstance(machine, CircuitDrifter) else None
+
+
+def _impacts(machine, duration_s: float, most: int | None):
+    """The impact times (s) and velocities (m/s) of ``machine.simulate(duration_s)`` from rest (a
+    circuit drifter's up to its ``most``-th impact)."""
+    from .circuit import CircuitDrifter
+
+    if isinstance(machine, CircuitDrifter):  # (the impacts alone: each blow summarised)
+        run = machine.simulate(duration_s, histories=False, max_impacts=most)
         return np.asarray(run["impact_times_s"], float), np.asarray(run["impact_velocities_m_s"], float)
     tr, _ = machine.simulate(duration_s)
     om, length = machine.omega_rad_s, machine.bar.length_m
@@ -42,8 +60,10 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25, *, rate_hz: flo
 
     The first run lasts ``blows / rate_hz`` seconds; where it holds fewer blows (impacts at
     least ``blow_fraction`` of its hardest) a longer one follows, from rest again, up to
-    :data:`SETTLE_RUNS` runs and at most :data:`SETTLE_LONGEST` times the first. The impacts after
-    the ``blows``-th blow are dropped.
+    :data:`SETTLE_RUNS` runs and at most :data:`SETTLE_LONGEST` times the first. A circuit drifter's
+    run ends at its ``SETTLE_IMPACTS_PER_BLOW * blows``-th impact: where it holds fewer blows by then
+    it is the last (another from rest would repeat it). The impacts after the ``blows``-th blow are
+    dropped.
 
     Parameters
     ----------
@@ -61,7 +81,8 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25, *, rate_hz: flo
     times_s, velocities_m_s : numpy.ndarray
         The impacts kept (s, m/s).
     t_end_s : float
-        The ``blows``-th blow's time, or the last run's duration where no run held that many.
+        The ``blows``-th blow's time, or where no run held that many the last run's duration, or its
+        last impact's time where it ended at its impacts' bound.
 
     Raises
     ------
@@ -72,9 +93,9 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25, *, rate_hz: flo
     if not rate_hz > 0.0:
         raise ValueError(f"rate_hz must be above 0 Hz; got {rate_hz!r}")
     ran, duration = 0.0, blows / rate_hz
-    longest = SETTLE_LONGEST * duration
+    longest, most = SETTLE_LONGEST * duration, _most_impacts(machine, blows)
     for _ in range(SETTLE_RUNS):
-        t, v = _impacts(machine, duration)
+        t, v = _impacts(machine, duration, most)
         ran = duration
         top = float(np.max(v)) if v.size else 0.0
         where = np.flatnonzero(v >= blow_fraction * top) if top > 0 else np.zeros(0, int)
@@ -82,6 +103,8 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25, *, rate_hz: flo
             end = float(t[where[blows - 1]])
             keep = t <= end
             return t[keep], v[keep], end
+        if most is not None and t.size >= most:  # (at its impacts' bound: a longer run repeats it)
+            return t, v, float(np.max(t))  # (its last impact)
         # long enough for the blows at the rate seen and a tenth more, at most the longest run
         grown = min(duration * (max(1.1, 1.1 * blows / where.size) if where.size else 4.0), longest)
         if grown <= duration:  # (the longest run done: another from rest would repeat it)
@@ -112,7 +135,9 @@ def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolera
         Where the motion has not settled in ``blows``, runs from rest of :data:`SETTLE_GROWTH`
         times more blows follow, up to ``most_blows`` (at least ``blows``): the classification run
         until it can tell (a drifter's blows rising with its supply pressure for some 80 blows
-        before they alternate). Default ``blows``: one run.
+        before they alternate); not after a run that ended at its impacts' bound
+        (:data:`SETTLE_IMPACTS_PER_BLOW`) with fewer blows than wanted: more blows wanted would buy
+        more of its chatter. Default ``blows``: one run.
 
     Returns
     -------
@@ -144,7 +169,9 @@ def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolera
         res = SimulationResult(hammer=None, trajectory=None, t_end_s=end, impact_times_s=t,
                                impact_velocities_m_s=v, impact_energies_J=0.5 * machine.bar.mass_kg * v * v)
         stats = res.blow_statistics(blow_fraction=blow_fraction, settle_tolerance=settle_tolerance)
-        if stats.settled or blows >= most:
+        bound = _most_impacts(machine, blows)
+        bounded = stats.n_blows < blows and bound is not None and t.size >= bound
+        if stats.settled or blows >= most or bounded:
             break
         # (the next run's length at the rate seen: the blows come faster as a supply charges)
         rate = max(rate, stats.n_blows / end) if end > 0.0 else rate
