@@ -193,15 +193,17 @@ EXACT_ORBIT = (45.66071548948399, 10.385623363299239, 218.37092601557174, 0.9145
 def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
     """The exact blows' coarse model ends its lattice blows where the exact ones end
     (``driven_end="free"``): the polish starts 2.6e-4 from the exact orbit (8.8e-3 at the law's
-    window), its chord two steps (four from the window), 4 exact blows an orbit, not 6. The orbit is
-    the window-started polish's to that polish's own spread: started 1e-6 or 1e-4 away, the
-    window-started polish moves the figures by up to 4.9e-10 and the largest multipliers by up to
-    1.1e-9 (measured; the chord stops at 1e-9); the new start moves them 4.5e-10 and 3.2e-10 (measured).
-    And its root is the exact problem's: a full Newton step from it moves the unknowns by less than
-    2e-9 of their size."""
+    window), its chord two steps (four from the window), 4 exact blows an orbit, not 6, its Jacobian
+    the lattice orbit's monodromy (no steering Jacobian of the lattice's blow again). The orbit is
+    the window-started polish's to the order of that polish's own spread: started 1e-6 or 1e-4 away,
+    the window-started polish moves the figures by up to 4.9e-10 and the two largest multipliers by
+    up to 9.7e-10 (measured; the chord stops at 1e-9); the new start moves them 5.6e-10 and 1.8e-10
+    (measured). And its root is the exact problem's: a full Newton step from it moves the unknowns
+    by less than 2e-9 of their size."""
     import dataclasses
     import tomllib
 
+    import impactbar.orbits.coupled as OC
     from impactbar.physical import CircuitDrifter
     from impactbar.physical.circuit import CircuitDrifterOrbit
 
@@ -213,8 +215,17 @@ def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
     auto = model.with_(impact=dataclasses.replace(model.law, method="auto", cells_per_piston=None))
     assert auto.law.coarse_model(auto).law.driven_end == auto.law.driven_end  # (its own blows' end)
     count = _counted_exact_blows(monkeypatch)
+    steering = []  # (the lattice's blow Jacobians by forward differences: the steering ones)
+    real = OC.blow_jacobian
+
+    def jacobian(model, *args, forward=None, **kwargs):
+        steering.append(forward is not None and model.law.method == "lattice")
+        return real(model, *args, forward=forward, **kwargs)
+
+    monkeypatch.setattr(OC, "blow_jacobian", jacobian)
     orbit = find_orbit(exact, drifter.drive())
     assert count[0] <= 4
+    assert sum(steering) == 1  # the lattice orbit's chord's; the polish's is its monodromy's (not again)
     point = CircuitDrifterOrbit(drifter, orbit)
     rock = point.rock()
     mu = np.sort(np.abs(np.asarray(orbit.multipliers)))[::-1][:2]
