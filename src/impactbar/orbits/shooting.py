@@ -551,8 +551,10 @@ class ShootingProblem(OrbitProblem):
             own start).
         """
         X = self.initial(rough, tol, max_iter)
-        first = rough._monodromy - np.eye(self.n) if self.impacts == 1 and rough._monodromy is not None \
-            else rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))[1]
+        if self.impacts == 1 and rough._monodromy is not None:
+            first = rough._monodromy - np.eye(self.n)
+        else:
+            _, first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))
         return self._close(*self._chord(X, first, max(tol, self.accuracy), max_iter))
 
     def _chord(self, X, first, tol: float, max_iter: int, first_value=None, handover: float = 0.0,
