@@ -268,12 +268,12 @@ WHY_LATTICE = (
     "force's iteration would replace those differences")
 
 WHY_EXACT_COST = (
-    "the exact orbit is found on the lattice and polished on 16 exact blows (0.6-0.7 s of CPU each, "
-    "7 rounds of the drive's force; 87 % of the orbit): 10 are the multipliers' central differences "
-    "(55 %), 4 the chord's, 1 the closing step's, 1 the orbit's own; the exact solver is 2/3 of the "
-    "orbit, each blow's last two rounds (near the whole blow and its force's cubics) 3/4 of its solves. "
-    "A tangent of the coupled exact blow would leave 6 blows, 13-17x the lattice's orbit; the rest "
-    "needs cheaper rounds (HISTORY.md)")
+    "the exact orbit is found on the lattice (64 cells, its blows ended where the exact ones end) and "
+    "polished on 4 exact blows (0.5-0.7 s of CPU each, 7 rounds of the drive's force): 2 the chord's, "
+    "1 the closing step's, 1 the orbit's own with its tangent (whose primal blow is solved again, 0.3 s); "
+    "the lattice orbit some 0.9 s; each blow's last two rounds (near the whole blow and its force's "
+    "cubics) 3/4 of its solves. The rest needs cheaper rounds or a tangent that reuses the last round "
+    "(HISTORY.md)")
 WHY_DEFAULT_DISTANCE = (
     "the default's blows are the lattice's at the example's 8 cells a piston, ended at the law's "
     "window (4.3e-3 from the exact orbit); ended where the exact blows end (driven_end='free') "

@@ -88,20 +88,36 @@ def test_forward_differences_of_the_blow_are_the_central_ones_to_their_step(both
         blow_jacobian(model, drive, t, q, v, state, forward=y[:-1])
 
 
+def _counted_exact_blows(monkeypatch):
+    """A list whose one entry counts the exact coupled blows solved from here on."""
+    import impactbar.laws.rodrock.coupled_exact as CE
+
+    count = [0]
+    real = CE.driven_exact_contact
+
+    def counted(*args, **kwargs):
+        count[0] += 1
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(CE, "driven_exact_contact", counted)
+    return count
+
+
 @pytest.mark.slow
 def test_the_exact_blows_orbit_starts_on_the_lattice(rock_drifter, monkeypatch):
     """With exact blows (``RodRock(method="exact")``, the rod as given) ``find_orbit`` finds the orbit
     on the lattice and polishes it on the exact blows with the lattice's Jacobian as the chord's
-    (``ShootingProblem.polish``): 6 exact blows where the default chain on the exact blows took 21
-    (measured, 7.9 s of CPU against 9.3 s; 16 and 31 while the multipliers' Jacobian took ten blows
-    of central differences, not the blow's tangent). Its root is the exact problem's: a full Newton
-    step from it (the tangent of the exact blow) moves the unknowns by 4.9e-10 of their size
-    (measured), and the default chain's orbit is the same to the chord's tolerance (the periods
-    measured 3.1e-10 apart, 3.6e-10 and 5.4e-11 from the full step's; with the multipliers' and the
-    full step's Jacobian by central differences 3.7e-9 apart, 1.8e-10 and 3.9e-9)."""
+    (``ShootingProblem.polish``): 4 exact blows where the default chain on the exact blows took 21
+    (measured, 6.5 s of CPU against 9.1 s; 6 while the lattice's blows ended at the law's window, 16
+    and 31 while the multipliers' Jacobian took ten blows of central differences, not the blow's
+    tangent). Its root is the exact problem's: a full Newton step from it (the tangent of the exact
+    blow) moves the unknowns by 6.5e-10 of their size (measured; 4.9e-10 from the window's start),
+    and the default chain's orbit is the same to the chord's tolerance (the periods measured 7.8e-11
+    apart, 1.2e-10 and 1.9e-10 from the full step's; from the window's start 3.1e-10, 3.6e-10 and
+    5.4e-11; with the multipliers' and the full step's Jacobian by central differences 3.7e-9 apart,
+    1.8e-10 and 3.9e-9)."""
     import dataclasses
 
-    import impactbar.laws.rodrock.coupled_exact as CE
     import impactbar.orbits.driven_search as S
     from impactbar.physical import build, read_config
 
@@ -111,14 +127,7 @@ def test_the_exact_blows_orbit_starts_on_the_lattice(rock_drifter, monkeypatch):
     drive = rock_drifter[1]
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
     assert exact.law.coarse_model(exact) is not None
-    count = [0]
-    real = CE.driven_exact_contact
-
-    def counted(*args, **kwargs):
-        count[0] += 1
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(CE, "driven_exact_contact", counted)
+    count = _counted_exact_blows(monkeypatch)
     polished = find_orbit(exact, drive)
     assert count[0] <= 8
     problem = polished.problem
@@ -171,3 +180,61 @@ def test_the_exact_blows_multipliers_do_not_depend_on_the_step(rock_drifter, mon
     np.testing.assert_allclose(largest(), tangent, rtol=0, atol=2e-7)
     monkeypatch.setattr(OC, "FD_STEP_EXACT_BLOW", OC.FD_STEP_BLOW / 10)  # noise over the step
     assert np.max(np.abs(largest() - tangent)) > 5e-8
+
+
+#: The exact blows' orbit of ``examples/circuit_drifter_rock.toml`` as the polish from the lattice's
+#: orbit at the law's window found it (blow frequency Hz, impact velocity m/s, work on rock J,
+#: penetration mm, mean supply pressure Pa; the two largest multipliers): 6 exact blows.
+EXACT_ORBIT = (45.66071548948399, 10.385623363299239, 218.37092601557174, 0.9145101705343387,
+               22615477.619608734, 0.9163043129185183, 0.08601934993829452)
+
+
+@pytest.mark.slow
+def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
+    """The exact blows' coarse model ends its lattice blows where the exact ones end
+    (``driven_end="free"``): the polish starts 2.6e-4 from the exact orbit (8.8e-3 at the law's
+    window), its chord two steps (four from the window), 4 exact blows an orbit, not 6, its Jacobian
+    the lattice orbit's monodromy (no steering Jacobian of the lattice's blow again). The orbit is
+    the window-started polish's to the order of that polish's own spread: started 1e-6 or 1e-4 away,
+    the window-started polish moves the figures by up to 4.9e-10 and the two largest multipliers by
+    up to 9.7e-10 (measured; the chord stops at 1e-9); the new start moves them 5.6e-10 and 1.8e-10
+    (measured). And its root is the exact problem's: a full Newton step from it moves the unknowns
+    by less than 2e-9 of their size."""
+    import dataclasses
+    import tomllib
+
+    import impactbar.orbits.coupled as OC
+    from impactbar.physical import CircuitDrifter
+    from impactbar.physical.circuit import CircuitDrifterOrbit
+
+    with open(ROCK_EXAMPLE, "rb") as f:
+        drifter = CircuitDrifter.from_config(tomllib.load(f))
+    model = drifter.model()
+    exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
+    assert exact.law.coarse_model(exact).law.driven_end == "free"
+    auto = model.with_(impact=dataclasses.replace(model.law, method="auto", cells_per_piston=None))
+    assert auto.law.coarse_model(auto).law.driven_end == auto.law.driven_end  # (its own blows' end)
+    count = _counted_exact_blows(monkeypatch)
+    steering = []  # (the lattice's blow Jacobians by forward differences: the steering ones)
+    real = OC.blow_jacobian
+
+    def jacobian(model, *args, forward=None, **kwargs):
+        steering.append(forward is not None and model.law.method == "lattice")
+        return real(model, *args, forward=forward, **kwargs)
+
+    monkeypatch.setattr(OC, "blow_jacobian", jacobian)
+    orbit = find_orbit(exact, drifter.drive())
+    assert count[0] <= 4
+    assert sum(steering) == 1  # the lattice orbit's chord's; the polish's is its monodromy's (not again)
+    point = CircuitDrifterOrbit(drifter, orbit)
+    rock = point.rock()
+    mu = np.sort(np.abs(np.asarray(orbit.multipliers)))[::-1][:2]
+    got = (point.blow_frequency_Hz, point.impact_velocity_m_s, rock["work_on_rock_J"], rock["penetration_mm"],
+           point.mean_supply_pressure_Pa, *mu)
+    np.testing.assert_allclose(got[:5], EXACT_ORBIT[:5], rtol=1e-9, atol=0)
+    np.testing.assert_allclose(got[5:], EXACT_ORBIT[5:], rtol=0, atol=2e-9)
+    problem = orbit.problem
+    X = np.asarray(orbit._unknowns, dtype=float)
+    r, J = problem.residual(X)
+    step = np.linalg.solve(J, -r)
+    assert np.max(np.abs(step) / np.maximum(np.abs(X), 1e-300)) < 2e-9
