@@ -275,12 +275,12 @@ WHY_EXACT_COST = (
     "cubics) 3/4 of its solves. The rest needs cheaper rounds or a tangent that reuses the last round "
     "(HISTORY.md)")
 WHY_DEFAULT_DISTANCE = (
-    "the default's blows are the lattice's at the example's 8 cells a piston, ended at the law's "
-    "window (4.3e-3 from the exact orbit); ended where the exact blows end (driven_end='free') "
-    "1.4e-3, on 64 and 128 cells 2.0e-5: the rod's segments rounded to whole cells (1.9 % of a "
-    "travel time on 8 cells, 0.13 % on 64 and 128) and the contact's re-contacts and separations at "
-    "step ends, each first order (benchmarks/probes/lattice_order.py; a re-contact located inside "
-    "its step alone was no closer, its front's return opening the contact inside a later cell)")
+    "the default's blows are the lattice's at the example's 8 cells a piston, ended where the exact "
+    "blows end (driven_end='free'): 1.4e-3 from the exact orbit (ended at the law's window 4.3e-3), "
+    "on 64 and 128 cells 2.0e-5: the rod's segments rounded to whole cells (1.9 % of a travel time on "
+    "8 cells, 0.13 % on 64 and 128) and the contact's re-contacts and separations at step ends, each "
+    "first order (benchmarks/probes/lattice_order.py; located inside their steps, "
+    "contact_events='inside', the orbit is farther: 2.6e-3 on 8 cells)")
 
 WHY_DRILL = (
     "the drill's circuit has two more nodes with a pressure state (the cushion's, the return line's), "

@@ -30,7 +30,8 @@ EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
 def arrival(values=None):
     """The exact model, the drive and the second arrival's ``(state, t0, q, v)`` (the config's dotted
-    keys ``values`` changed first, e.g. the rod's lengths)."""
+    keys ``values`` changed first, e.g. the rod's lengths; the first blow on the lattice ended at the
+    law's window on every tree, where the law has ``driven_end``)."""
     cfg, _ = read_config(str(EXAMPLE))
     del cfg["rock"]["cells_per_piston"]
     if values:
@@ -38,7 +39,10 @@ def arrival(values=None):
     drifter = build(cfg)
     model, drive = drifter.model(), drifter.drive()
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
-    lattice = model.with_(impact=dataclasses.replace(model.law, method="lattice", cells_per_piston=16))
+    named = {f.name for f in dataclasses.fields(model.law)}
+    window = {"driven_end": "window"} if "driven_end" in named else {}
+    lattice = model.with_(impact=dataclasses.replace(model.law, method="lattice", cells_per_piston=16,
+                                                     **window))
     start = ib.InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
     blow = ib.simulate(lattice, drive, start, 7.0).impacts[1]
     state = ib.simulate(lattice, drive, start, blow.t0 - 1e-12)._final_drive

@@ -314,10 +314,12 @@ def _documented_problem():
 
 @functools.cache
 def _documented_certificate():
-    """The page's design (``drifter_optimum.OPTIMUM``) scaled, its fresh record, the objective's and
-    the scaled margins' gradients by central differences of fresh orbits (step 1e-4 of the spans) and
-    its certificate at COBYLA's resolution 2e-3 (computed once for the slow tests that use them)."""
-    from drifter_optimum import OPTIMUM
+    """The page's design of the search with the blows ended at the law's window
+    (``drifter_optimum.WINDOW_OPTIMUM``; the callers build under ``window_end``) scaled, its fresh
+    record, the objective's and the scaled margins' gradients by central differences of fresh orbits
+    (step 1e-4 of the spans) and its certificate at COBYLA's resolution 2e-3 (computed once for the
+    slow tests that use them)."""
+    from drifter_optimum import WINDOW_OPTIMUM as OPTIMUM
 
     from impactbar.physical.optimality import central_gradients
 
@@ -335,7 +337,7 @@ def _documented_certificate():
 
 
 @pytest.mark.slow
-def test_the_certificate_s_gradients_refine_their_step_at_a_border():
+def test_the_certificate_s_gradients_refine_their_step_at_a_border(monkeypatch):
     """The whole drifter's best design found by the multistart (docs/optimising_a_drifter.md, to the
     digits printed there) lies within 1e-3 of its span of designs without an orbit (the front rod 1e-3
     thinner has none): the implicit function theorem's differences at their default step straddle the
@@ -344,6 +346,9 @@ def test_the_certificate_s_gradients_refine_their_step_at_a_border():
     differences of fresh orbits (1e-3 of the span; forward for the front rod) to 1 %, and the
     certificate finds the drilling rate binding (multiplier 0.28), where the default step's left no
     multiplier and a residual of 1."""
+    from drifter_optimum import window_end
+
+    window_end(monkeypatch)  # (where the page's figures of this design were measured)
     from impactbar.physical.optimize_problem import _design_gradient, _refined_gradient
 
     cfg, folder, spec, keys, span, limits, fresh, scaled = _documented_problem()
@@ -372,7 +377,7 @@ def test_the_certificate_s_gradients_refine_their_step_at_a_border():
 
 
 @pytest.mark.slow
-def test_the_documented_design_lies_before_a_border_of_its_orbit():
+def test_the_documented_design_lies_before_a_border_of_its_orbit(monkeypatch):
     """Why the page's design (six variables, the drilling rate held) is not certified: its KKT residual
     is the design's, not its gradients' or its active set's. Central differences of fresh orbits
     (step 1e-4 of the spans) give the page's residual, active set and multiplier; along the projected
@@ -381,6 +386,9 @@ def test_the_documented_design_lies_before_a_border_of_its_orbit():
     branch that drills slower than the limit: the best design of its branch lies at that border,
     where the drilling rate jumps, not at a smooth stationary point. The page's figures of it to the
     digits it prints."""
+    from drifter_optimum import window_end
+
+    window_end(monkeypatch)  # (where the page's figures of this design were measured)
     import re
 
     *_, fresh, _ = _documented_problem()
@@ -388,7 +396,9 @@ def test_the_documented_design_lies_before_a_border_of_its_orbit():
     u, rec, g, G, cert = _documented_certificate()
     text = re.sub(r"\s+", " ", (Path(__file__).resolve().parents[2] / "docs" / "optimising_a_drifter.md")
                   .read_text())
-    m = re.search(r"KKT residual ([0-9.]+), the drilling rate active with the multiplier ([0-9.]+)\)", text)
+    m = re.search(r"fixed window, the default before .*? the same search reported .*?"
+                  r"\(\"stopped at a budget\", KKT residual ([0-9.]+), the drilling rate active with the "
+                  r"multiplier ([0-9.]+)\)", text)
     assert cert.active == ["min_drilling_rate"] and not cert.bounds
     assert cert.residual == pytest.approx(float(m[1]), abs=5e-4)
     assert cert.multipliers["min_drilling_rate"] == pytest.approx(float(m[2]), abs=5e-3)
@@ -453,7 +463,7 @@ def _recontact(point):
 
 
 @pytest.mark.slow
-def test_the_border_is_the_lattice_blow_s_recontact_moving_a_step():
+def test_the_border_is_the_lattice_blow_s_recontact_moving_a_step(monkeypatch):
     """The border along the page's design's projected gradient is the lattice blow's re-contact of the
     piston on the shank (after it separates, some 71 steps into the blow) moving one step later: the
     gap's closing at the end of the step before it (:func:`_recontact`'s margin) goes to 0 smoothly
@@ -465,6 +475,9 @@ def test_the_border_is_the_lattice_blow_s_recontact_moving_a_step():
     COBYLA's last step (2e-3 of the spans) of it. With 16 cells a piston (the example's 8) the orbit
     goes on through the border to 0.01 (the drilling rate within 5e-5 m/min, 2e-3 m/min above the
     8 cells' figure): the border is the lattice's."""
+    from drifter_optimum import window_end
+
+    window_end(monkeypatch)  # (where the page's figures of this design were measured)
     cfg, folder, spec, keys, span, *_ = _documented_problem()
     u, rec, g, G, cert = _documented_certificate()
     p = g + cert.multipliers["min_drilling_rate"] * G[-1]

@@ -1,5 +1,7 @@
 """Designs of the whole-drifter optimiser without a one-impact orbit: what their evaluation costs
-(about what a design with an orbit costs) and what their record says."""
+(about what a design with an orbit costs) and what their record says. The designs are those the
+documented search met with the blows ended at the law's fixed window, and are built so
+(``drifter_optimum.window_end``)."""
 
 from __future__ import annotations
 
@@ -8,7 +10,7 @@ import re
 
 import numpy as np
 import pytest
-from drifter_optimum import BUZZING, EXAMPLE, SEARCHED, collar
+from drifter_optimum import BUZZING, EXAMPLE, SEARCHED, collar, window_end
 
 from impactbar.orbits import coupled
 from impactbar.physical import CircuitDrifter, build, read_config, settle, with_values
@@ -23,6 +25,12 @@ from impactbar.physical.optimize_failures import (
 )
 
 pytest.importorskip("pint")
+
+
+@pytest.fixture(autouse=True)
+def _window_end(monkeypatch):
+    """The designs' blows ended at the law's window, where they were found."""
+    window_end(monkeypatch)
 
 
 def _page() -> str:

@@ -45,7 +45,8 @@ class OrbitData(NamedTuple):
         The smallest rate of the gap at the drive's position crossings (0 where a switching surface
         is grazed), ``nan`` where the drive has none.
     contact_time : float
-        The law's window (0 under the paper's law).
+        The law's window (0 under the paper's law), or the longest blow where the blows end by
+        their own test (the rod-rock law's under a drive with state, theory §11).
     contact_forces : numpy.ndarray, shape (m,)
         The drive's force held during each contact.
     monodromy : numpy.ndarray or None

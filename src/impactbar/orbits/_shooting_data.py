@@ -50,6 +50,7 @@ def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:
     before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
     shift = 0.0
     window = float(model.law.window(model))
+    blows = []  # each blow's duration (the window's but where a blow ends by its own test)
     for k in range(m):
         tau, mode = problem.blocks[k]
         y = X[k * n:(k + 1) * n]
@@ -71,8 +72,11 @@ def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:
             if not math.isnan(speed):
                 crossings.append(speed)
         durations.append(t_arr - last)
+        blows.append(float(t_after - t_arr))
         shift += t_after - tau
     blocks = X.reshape(m, n)
+    if window and not all(math.isclose(b, window, rel_tol=1e-9) for b in blows):
+        window = max(blows)  # (the rod-rock law's blows under a drive with state: where the piston is free)
     return OrbitData(period=float(shift), durations=np.array(durations),
                      states_after=blocks[:, :2 * M].copy(),
                      states_before=np.array(before), impact_velocities=np.array(velocities),

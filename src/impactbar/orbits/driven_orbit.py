@@ -96,8 +96,10 @@ class DrivenOrbit(PeriodicOrbit):
         period's crossings): 0 where the orbit grazes the switching surface (theory §10); ``nan``
         for a drive without position crossings.
     contact_time : float
-        Under a law whose contact takes time, the contact's duration (``ContactLaw.window``):
-        ``state`` and ``states`` are then where each contact ends. 0 under the paper's law.
+        Under a law whose contact takes time, the contact's duration (``ContactLaw.window``, or the
+        blow's where it ends by its own test: the rod-rock law's under a drive with state, where
+        the piston is free for good, theory §11; the longest of the period's): ``state`` and
+        ``states`` are then where each contact ends. 0 under the paper's law.
     drive_states : numpy.ndarray, shape (m, k)
         The drive's continuous state where each interval starts (empty for a drive without state).
     contacts : tuple
