@@ -637,7 +637,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
             else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
         status, message, ts, Y, yend, hit = integrate(par, settings, directions, y0, 0.0, end - t, keep)
         _LAST.method = "adams" if adams else "bdf"
-    if status < 0 or not np.all(np.isfinite(yend)):
+    if status < 0 or not np.isfinite(yend).all():
         raise ValueError(drive._failure(model, _message(status) if message is None else message, t))
     own = ts  # (the flight's own time, from 0)
     ts = ts + t
