@@ -49,18 +49,18 @@ def through(model, drive, k: int, mode, fl, fired, D):
     if fired is None:
         grad = np.concatenate((model.end_weights, np.zeros(M + k)))
     else:
-        e = fired[0]
-
-        def h(yy):
-            return e.value(fl.t, yy[:M], yy[M:2 * M], yy[2 * M:])
-
+        value, t = fired[0].value, fl.t
+        yy = y.copy()  # (one state, each component moved and put back: the event functions only read it)
+        q, v, z = yy[:M], yy[M:2 * M], yy[2 * M:]
         grad = np.empty(n)
-        for j in range(n):
-            step = 1e-7 * max(1.0, abs(y[j]))
-            yp, ym = y.copy(), y.copy()
-            yp[j] += step
-            ym[j] -= step
-            grad[j] = (h(yp) - h(ym)) / (2.0 * step)
+        for j, yj in enumerate(y.tolist()):  # (as floats: the same roundings as numpy's scalars')
+            step = 1e-7 * max(1.0, abs(yj))
+            yy[j] = yj + step
+            up = value(t, q, v, z)
+            yy[j] = yj - step
+            down = value(t, q, v, z)
+            yy[j] = yj
+            grad[j] = (up - down) / (2.0 * step)
     Phi = fl.sensitivity
     rate = float(grad @ f)
     Dt = Phi - np.outer(f, grad @ Phi) / rate
@@ -93,10 +93,10 @@ def map_jacobian(fn, z):
     z = np.asarray(z, dtype=float)
     k = z.size
     out = np.empty((k, k))
-    for j in range(k):
-        step = 1e-7 * max(1.0, abs(z[j]))
+    for j, zj in enumerate(z.tolist()):  # (as floats: the same roundings as numpy's scalars')
+        step = 1e-7 * max(1.0, abs(zj))
         zp, zm = z.copy(), z.copy()
-        zp[j] += step
-        zm[j] -= step
+        zp[j] = zj + step
+        zm[j] = zj - step
         out[:, j] = (np.asarray(fn(zp), dtype=float) - np.asarray(fn(zm), dtype=float)) / (2.0 * step)
     return out

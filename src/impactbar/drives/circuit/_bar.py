@@ -20,7 +20,6 @@ frequencies and the driven end's weights (``M`` each), then the circuit's networ
 from __future__ import annotations
 
 import numba as nb
-import numpy as np
 
 from ...dynamics.compiled import CACHE
 
@@ -54,39 +53,20 @@ def end_motion(y, par, M):
 
 @nb.njit(**_JIT)
 def phi_rate(A, y, yp, off):
-    """``Phi' = A Phi`` into ``yp`` from ``Phi`` in ``y``, stored by columns from ``off`` (``n`` the
-    order of ``A``)."""
+    """``Phi' = A Phi`` into ``yp`` from ``Phi`` in ``y`` (another array), stored by columns from
+    ``off`` (``n`` the order of ``A``)."""
     n = A.shape[0]
-    # A's nonzeros by rows (some 9 M + 10 of n^2), each row's in increasing column, and Phi by
-    # rows: each entry of A Phi is the sum over the row's nonzeros, from 0 in increasing column (its
-    # zeros skipped), the sums of n entries side by side (each row's contiguous)
-    cols = np.empty(n * n, np.int64)
-    vals = np.empty(n * n)
-    rows = np.empty(n + 1, np.int64)
-    nz = 0
+    # each entry of A Phi the sum over its row's nonzeros of A (some 9 M + 10 of n^2), from 0 in
+    # increasing column (its zeros skipped), in place in yp: no scratch arrays
     for i in range(n):
-        rows[i] = nz
+        for j in range(n):
+            yp[off + j * n + i] = 0.0
+    for i in range(n):
         for k in range(n):
             a = A[i, k]
             if a != 0.0:
-                cols[nz] = k
-                vals[nz] = a
-                nz += 1
-    rows[n] = nz
-    P = np.empty((n, n))
-    for j in range(n):  # column j of Phi at off + j n
-        for k in range(n):
-            P[k, j] = y[off + j * n + k]
-    out = np.zeros((n, n))
-    for i in range(n):
-        for p in range(rows[i], rows[i + 1]):
-            a = vals[p]
-            k = cols[p]
-            for j in range(n):
-                out[i, j] += a * P[k, j]
-    for j in range(n):
-        for i in range(n):
-            yp[off + j * n + i] = out[i, j]
+                for j in range(n):
+                    yp[off + j * n + i] += a * y[off + j * n + k]
 
 
 @nb.njit(**_JIT)

@@ -52,6 +52,7 @@ _band_data = _ext("SUNBandMatrix_Data", _dp(_p))
 _band_ldim = _ext("SUNBandMatrix_LDim", types.int64(_p))
 _band_smu = _ext("SUNBandMatrix_StoredUpperBandwidth", types.int64(_p))
 _band_ml = _ext("SUNBandMatrix_LowerBandwidth", types.int64(_p))
+_band_mu = _ext("SUNBandMatrix_UpperBandwidth", types.int64(_p))
 _band_cols = _ext("SUNBandMatrix_Columns", types.int64(_p))
 _reinit = _ext("CVodeReInit", _c(_p, _d, _p))
 _tolerances = _ext("CVodeSStolerances", _c(_p, _d, _d))
@@ -69,13 +70,14 @@ _LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it
 @nb.njit(inline="always")
 def band_blocks(A, J, N, n_energy):
     """The band matrix ``J`` (``N x N``) zero but ``A`` (``n x n``) on the state's block and on each
-    column of ``Phi``'s (from ``n + n_energy``), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
+    column of ``Phi``'s (from ``n + n_energy``: ``(N - n - n_energy) / n`` of them, none in a plain
+    flight), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
     n = A.shape[0]
     ldim = _band_ldim(J) & _LOW32
     smu = _band_smu(J) & _LOW32
     data = nb.carray(_band_data(J), N * ldim)
     data[:] = 0.0
-    for blk in range(n + 1):  # the state, then each column of Phi
+    for blk in range(1 + (N - n - n_energy) // n):  # the state, then each column of Phi
         base = 0 if blk == 0 else n + n_energy + (blk - 1) * n
         for j in range(n):
             col = (base + j) * ldim + smu - j
@@ -126,13 +128,12 @@ def _block_factor(data, n, ldim, smu):
 
 
 @nb.njit(cache=CACHE, nogil=True)
-def _block_solve(data, n, ldim, smu, x, n_energy):
+def _block_solve(data, n, ldim, smu, x, n_energy, m):
     """SUNDIALS' band solve (``SUNDlsMat_bandGBTRS``) with :func:`_block_factor`'s LU on the state's
-    ``n`` components of ``x`` and each column of ``Phi``'s (from ``n + 8``), in place: the ``n + 1``
-    right-hand sides side by side (each row's contiguous), each component given the band solve's
-    operations in its order (the same products, the same sums); ``n_energy`` the energies' rows between
-    the state and ``Phi``."""
-    m = n + 1
+    ``n`` components of ``x`` and each column of ``Phi``'s (from ``n + n_energy``), in place: the
+    ``m`` right-hand sides (``n + 1`` in a variational flight, the state's alone in a plain one) side by
+    side (each row's contiguous), each component given the band solve's operations in its order (the
+    same products, the same sums); ``n_energy`` the energies' rows between the state and ``Phi``."""
     B = np.empty((n, m))
     for c in range(m):
         start = 0 if c == 0 else n + n_energy + (c - 1) * n
@@ -180,7 +181,9 @@ def _block_setup_c(S, A):
 @nb.cfunc(_c(_p, _p, _p, _p, _d), cache=CACHE)
 def _block_solve_c(S, A, x, b, tol):
     """``SUNLinearSolver``'s ``solve``: ``x`` from ``b`` by :func:`_block_solve` on the state's block
-    and each column of ``Phi``'s (the energies' rows: the identity's)."""
+    and each column of ``Phi``'s (the energies' rows: the identity's); a plain flight's matrix (its
+    upper bandwidth ``n``, one more than its lower: :class:`Workspace`'s ``plain``) on the state's
+    block alone."""
     N = _band_cols(A) & _LOW32
     ldim = _band_ldim(A) & _LOW32
     smu = _band_smu(A) & _LOW32
@@ -188,7 +191,10 @@ def _block_solve_c(S, A, x, b, tol):
     data = nb.carray(_band_data(A), N * ldim)
     xx = nb.carray(_nv_data(x), N)
     xx[:] = nb.carray(_nv_data(b), N)
-    _block_solve(data, n, ldim, smu, xx, N - n - n * n)
+    if (_band_mu(A) & _LOW32) >= n:
+        _block_solve(data, n, ldim, smu, xx, N - n, 1)
+    else:
+        _block_solve(data, n, ldim, smu, xx, N - n - n * n, n + 1)
     return 0
 
 
@@ -314,8 +320,11 @@ class Workspace:
     :func:`_block_solve_c`: one LU of the ``n x n`` block, applied to each block, the band LU's
     operations on each block in its order (the same steps, to the bit) for about ``n`` times fewer
     a factorisation and three times fewer a solve; ``blocks`` says whether they were (the band
-    solver's table as SUNDIALS 7 lays it out, checked, else the band solver's own). Freed when
-    collected.
+    solver's table as SUNDIALS 7 lays it out, checked, else the band solver's own). With ``plain``
+    (a plain flight, ``N = n + n_E``: the Newton matrix the state's block and the energies' identity,
+    which the dense solver's LU and solve leave apart to the bit: its pivots never in the energies'
+    zero rows, their updates all of zeros) the band matrix's upper bandwidth is ``band + 1``, which
+    tells :func:`_block_solve_c` that there is no ``Phi``. Freed when collected.
 
     Attributes
     ----------
@@ -323,27 +332,31 @@ class Workspace:
         The addresses :func:`fly` takes.
     """
 
-    def __init__(self, N: int, band: int, callbacks, blocks: bool = False, adams: bool = False):
+    def __init__(self, N: int, band: int, callbacks, blocks: bool = False, adams: bool = False,
+                 plain: bool = False):
         f = S.function
         ctx = ctypes.c_void_p()
         if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
             raise MemoryError("SUNContext_Create failed")
         f("SUNContext_ClearErrHandlers")(ctx)
         y = f("N_VNew_Serial")(N, ctx)
+        upper = band + 1 if plain and band else band
         if band:
-            A = f("SUNBandMatrix")(N, band, band, ctx)
+            A = f("SUNBandMatrix")(N, upper, band, ctx)
             LS = f("SUNLinSol_Band")(y, A, ctx) if y and A else None
         else:
             A = f("SUNDenseMatrix")(N, N, ctx)
             LS = f("SUNLinSol_Dense")(y, A, ctx) if y and A else None
         mem = f("CVodeCreate")(CV_ADAMS if adams else CV_BDF, ctx)
         self.ctx, self.mem, self.y, self.N, self.band, self.adams = ctx.value, mem, y, N, band, bool(adams)
+        self.plain = bool(plain and band)
         self._finalizer = weakref.finalize(self, _free, ctx.value, mem, y, A, LS)
         if not (y and A and LS and mem):
             raise MemoryError("SUNDIALS could not allocate a CVODE workspace")
-        if band:  # the storage the Jacobian writes (SUNBandMatrix: smu = min(N - 1, 2 band))
+        if band:  # the storage the Jacobian writes (SUNBandMatrix: smu = mu + ml, or min(N - 1, mu + ml))
             smu = f("SUNBandMatrix_StoredUpperBandwidth")(A) & _LOW32
-            if smu != min(N - 1, 2 * band) or f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
+            if smu not in (upper + band, min(N - 1, upper + band)) or \
+                    f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
                 raise RuntimeError("SUNDIALS' band matrix is not stored as documented")
         self.blocks = bool(blocks and band and _swap_ops(LS, ctx.value))
         rhs, jac, events, n_events = callbacks
@@ -376,18 +389,20 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def workspace(N: int, band: int, callbacks, blocks: bool = False, adams: bool = False) -> Workspace:
+def workspace(N: int, band: int, callbacks, blocks: bool = False, adams: bool = False,
+              plain: bool = False) -> Workspace:
     """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
     ``band``, or dense for 0; with ``blocks``, its setup and solve on the blocks; with ``adams``,
-    Adams-Moulton's method instead of BDF; :class:`Workspace`) and the compiled C callbacks
-    ``callbacks``, ``(rhs, jac, events, number of events)``, made on first use."""
+    Adams-Moulton's method instead of BDF; with ``plain``, a plain flight's: :class:`Workspace`) and
+    the compiled C callbacks ``callbacks``, ``(rhs, jac, events, number of events)``, made on first
+    use."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}
-    key = (N, band, callbacks[0].address, bool(blocks and band), bool(adams))
+    key = (N, band, callbacks[0].address, bool(blocks and band), bool(adams), bool(plain and band))
     ws = spaces.get(key)
     if ws is None:
-        ws = spaces[key] = Workspace(N, band, callbacks, blocks, adams)
+        ws = spaces[key] = Workspace(N, band, callbacks, blocks, adams, plain)
     _LOCAL.last = ws
     return ws
 

@@ -58,6 +58,7 @@ FUNCTIONS = {
     "SUNBandMatrix_LDim": ("sundials_sunmatrixband", _i64, (_vp,)),
     "SUNBandMatrix_StoredUpperBandwidth": ("sundials_sunmatrixband", _i64, (_vp,)),
     "SUNBandMatrix_LowerBandwidth": ("sundials_sunmatrixband", _i64, (_vp,)),
+    "SUNBandMatrix_UpperBandwidth": ("sundials_sunmatrixband", _i64, (_vp,)),
     "SUNBandMatrix_Columns": ("sundials_sunmatrixband", _i64, (_vp,)),
     "SUNLinSol_Band": ("sundials_sunlinsolband", _vp, (_vp, _vp, _vp)),
     "SUNLinSolSetup_Band": ("sundials_sunlinsolband", _int, (_vp, _vp)),

@@ -50,7 +50,7 @@ _REL = "relief"
 _OWN_EVENTS = (_RAMP, _ACC, _REL)
 #: the drive's caches computed on use (its ``functools.cached_property`` s), left out of its pickle
 _CACHED = ("_composition", "_stand_in", "_watched", "traits", "abilities", "_event_parts", "_event_slots",
-           "_event_flags", "_per_mode", "_flights")
+           "_event_flags", "_per_mode", "_flights", "_fired_store")
 
 
 @dataclass(frozen=True)
@@ -339,10 +339,25 @@ class HydraulicCircuitDrive(Drive):
         names.update((K.RAMP_EV + i, name) for i, name in enumerate(self._composition.events))
         return names
 
+    @functools.cached_property
+    def _fired_store(self) -> dict:
+        """:meth:`_fired`'s store, by mode and the slots hit (at most 256 keys)."""
+        return {}
+
     def _fired(self, mode, hit):
-        names = self._event_slots
-        wanted = {names[i] for i in hit if i in names}
-        return tuple(e for e in self.events(mode) if e.name in wanted)
+        """The events of ``mode`` whose slots in the kernels' event functions are in ``hit``, in the
+        drive's order (made once per mode and slots: a flight's end asks it again and again)."""
+        key = (tuple(mode), tuple(hit))
+        store = self._fired_store
+        out = store.get(key)
+        if out is None:
+            names = self._event_slots
+            wanted = {names[i] for i in hit if i in names}
+            out = tuple(e for e in self.events(mode) if e.name in wanted)
+            if len(store) >= 256:
+                store.clear()
+            store[key] = out
+        return out
 
     def _failure(self, model, message, t) -> str:
         if "max_num_steps" in message:  # (CVODE's CV_TOO_MUCH_WORK: the flight, not the circuit)

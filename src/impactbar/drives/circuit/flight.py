@@ -25,7 +25,9 @@ network's code (:mod:`._dop853`: scipy's method, CVODE's root finding on its den
 Adams' CPU time at equal or better accuracy, at :data:`EXPLICIT_TOLERANCE` times its tolerance). The
 variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
 (``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's ``n x n``
-block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its events (the arrival
+block and applied to each column of ``Phi``'s (``blocks=True``, the default; the plain flights' by
+CVODE the same LU of the state's block, the energies' rows the identity's, where the dense solver
+factored them whole: the same steps, to the bit). Its events (the arrival
 ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
 pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's tolerance
 (the ramp's end, linear in time, to rounding). Each flight is integrated in its own time, from 0 (the
@@ -402,14 +404,18 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (the message
     None, :func:`_message` of the flag when it is wanted; ``band``: the
     variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
-    solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``adams``: Adams-Moulton's
+    solver's setup and solve on the blocks, :class:`._cvode.Workspace`, and with ``band`` the plain
+    flights' too (the state's block, the energies' identity: the dense solver's steps to the bit), else
+    the plain flights' by the dense solver; ``adams``: Adams-Moulton's
     method, else BDF; ``n_energy`` the energy integrands after the ``n`` states; ``code``: the
     flight's kernels, whose C callbacks CVODE calls: the generated module, :mod:`._netgen`)."""
     n = keep - n_energy
     var = band and y0.size > keep  # variational: the band solver
+    by_blocks = var or (band and blocks and n_energy > 0)  # (a plain flight's blocks: the energies' rows)
     rhs, jac, jac_band, events, n_events = code.CALLBACKS
-    callbacks = (rhs, jac_band if var else jac, events, n_events)
-    ws = cv.workspace(y0.size, n - 1 if var else 0, callbacks, blocks and var, adams)
+    callbacks = (rhs, jac_band if by_blocks else jac, events, n_events)
+    ws = cv.workspace(y0.size, n - 1 if by_blocks else 0, callbacks, blocks and by_blocks, adams,
+                      not var)
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
@@ -631,7 +637,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
             else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
         status, message, ts, Y, yend, hit = integrate(par, settings, directions, y0, 0.0, end - t, keep)
         _LAST.method = "adams" if adams else "bdf"
-    if status < 0 or not np.all(np.isfinite(yend)):
+    if status < 0 or not np.isfinite(yend).all():
         raise ValueError(drive._failure(model, _message(status) if message is None else message, t))
     own = ts  # (the flight's own time, from 0)
     ts = ts + t

@@ -60,8 +60,10 @@ class CircuitFlightSettings(FlightSettings):
         ``False``: by the dense solver (the same to rounding). Only with ``compiled``.
     blocks : bool, optional
         With ``band``, that solver's LU taken on the systems' blocks (one ``n x n`` block for the
-        state and each column of ``Phi``; keyword, default ``True``); ``False``: the band solver's own
-        LU (the same steps, to the bit).
+        state and each column of ``Phi``; keyword, default ``True``), and the plain flights' Newton
+        systems on the state's block too (the energy integrands' rows are the identity's) where they
+        took the dense solver; ``False``: the band solver's own LU, the dense solver for the plain
+        flights (the same steps either way, to the bit).
     sensitivity : {"auto", "magnus", "cvode"}, optional
         How the variational flights (the Jacobians of Newton's method and the Floquet multipliers) take
         the fundamental matrix (keyword): ``"magnus"``, over the plain flight's steps by Magnus'
