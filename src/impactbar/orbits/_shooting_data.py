@@ -9,7 +9,28 @@ import numpy as np
 
 from ..drives.orbitproblem import OrbitData, sorted_multipliers
 
-__all__ = ["orbit_data"]
+__all__ = ["orbit_data", "starts_on_stop"]
+
+
+def starts_on_stop(problem, y) -> bool:
+    """Whether a block's flight of ``problem`` from the unknowns ``y`` (its first ``M`` the modal
+    positions) starts from their projection on the section ``c . q = 0`` (theory §10): always where
+    every flight starts on the stop (the law's ``flight_starts_on_stop``), else where the end is on
+    or beyond the stop. A blow that left the end off the stop (the rod-rock law's, ended where the
+    piston is free for good behind the shank's new rest position: theory §11, "The coupled blow") has
+    its flight start there, so that the orbit is the motion a run from its state repeats.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    y : array_like, shape (n,)
+        A block's unknowns ``(q, q', z)``.
+
+    Returns
+    -------
+    bool
+    """
+    return problem.on_stop or float(problem.model.end_weights @ np.asarray(y[:problem.M], dtype=float)) >= 0.0
 
 
 def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:
@@ -42,11 +63,13 @@ def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:
         Phi = np.eye(n)
         for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
             Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
-    if Phi is not None:
+    if Phi is not None and starts_on_stop(problem, X[:M]):  # (Phi's column along c . q zero)
         a = np.concatenate((c, np.zeros(M + problem.k)))
         Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
         B = Q[:, 1:n]
         mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
+    elif Phi is not None:  # a flight from off the stop: Phi maps the flow there to 0, one multiplier
+        mu = sorted_multipliers(np.linalg.eigvals(Phi))[:n - 1]  # 0 (the least, left out)
     before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
     shift = 0.0
     window = float(model.law.window(model))

@@ -37,7 +37,7 @@ from ._settling import (
     other_period,
     surfaces_ahead,
 )
-from ._shooting_data import orbit_data
+from ._shooting_data import orbit_data, starts_on_stop
 from .driven_orbit import DrivenOrbit, _constant_load
 
 __all__ = ["ShootingProblem"]
@@ -148,6 +148,8 @@ class ShootingProblem(OrbitProblem):
         if law.traits.restitution_in_kernel and model.R >= 1.0:
             raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
                              "energy leaves at the impacts)")
+        #: every flight starts on the stop, else where a blow left it (:func:`._shooting_data.starts_on_stop`)
+        self.on_stop = law.traits.flight_starts_on_stop
         self.M = model.n_modes + 1
         self.k = traits.state_size
         self.n = 2 * self.M + self.k
@@ -215,14 +217,17 @@ class ShootingProblem(OrbitProblem):
         model, drive, M = self.model, self.drive, self.M
         c = model.end_weights
         t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
-        q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
+        onto = starts_on_stop(self, q)
+        if onto:
+            q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
         state = DriveState(mode, np.array(z, dtype=float))
         pieces, events = [], []
         end = tau + HORIZON
         D = None
         if variational:  # the projection on the section
             D = np.eye(self.n)
-            D[0, :M] -= c
+            if onto:
+                D[0, :M] -= c
         carries = self._carries  # (the flights started from D: their sensitivity the Jacobian so far)
         carry = bool(variational) and carries is not None and carries(model, settings or self.settings)
         while True:
