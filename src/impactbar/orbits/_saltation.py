@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..drives.base import DriveState
+from ..drives.flight import vector_field
 
 __all__ = ["through", "map_jacobian"]
 
@@ -40,8 +41,6 @@ def through(model, drive, k: int, mode, fl, fired, D):
     -------
     numpy.ndarray, shape (n, n)
     """
-    from ..drives.flight import vector_field
-
     M = model.n_modes + 1
     n = 2 * M + k
     y = np.concatenate((fl.q, fl.v, fl.z))

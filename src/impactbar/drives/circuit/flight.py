@@ -419,7 +419,21 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
-    return int(flag), None, ts, Y, yend, np.flatnonzero(roots)
+    return int(flag), None, ts, Y, yend, [i for i, r in enumerate(roots.tolist()) if r]
+
+
+def _within(x, weights, chambers) -> bool:
+    """Whether a rigid piston's displacements ``w = -(x @ weights)`` (``x`` its modal coordinate at
+    the steps, shape ``(S, 1)``; ``weights`` its driven end's weight, shape ``(1,)``) leave both
+    chambers a volume (theory §11), as :meth:`~.parts.Chambers.check_volumes` finds them, without
+    the product's array: for a weight ``> 0`` the greatest displacement is ``-(weight min x)`` and the
+    least ``-(weight max x)``, the same floats (rounding is monotone); ``False`` where it cannot tell
+    (a weight ``<= 0``) or a chamber empties."""
+    (weight,) = weights.tolist()
+    if not weight > 0.0:
+        return False
+    return chambers.rear_volume + weight * float(x.min()) > 0.0 and \
+        chambers.front_volume - chambers.area_ratio * (weight * float(x.max())) > 0.0
 
 
 def _integrate_explicit(code, par, settings, directions, y0, end, keep, spacing):
@@ -612,16 +626,20 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         par, code, directions = kernels.par(drive, model, mode, variational), kernels, drive._directions(mode)
         c, weights = model.end_weights, model.drive_weights
     field_at = code.field_at
-    y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
+    keep = n + n_energy
+    y0 = np.zeros(keep + n * n if variational else keep)  # (q, v, z, the energies from 0, Phi by columns)
+    y0[:M], y0[M:2 * M], y0[2 * M:n] = q, v, z
     if variational:
-        y0 = np.concatenate((y0, (np.eye(n) if start is None else start).T.ravel()))
+        if start is None:
+            y0[keep::n + 1] = 1.0  # (the identity)
+        else:
+            y0[keep:] = start.T.ravel()
     end = t_stop if math.isfinite(t_stop) else t + 1e4
     if end <= t:
-        piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, c,
+        piece = CircuitPiece(np.array([t]), y0[None, :keep], par, M, c,
                              drive.chambers.area_ratio, L, field_at)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       (np.eye(n) if start is None else start) if variational or magnus else None)
-    keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
     explicit = not variational and uses_dop853(multistep, drive, model, generated)
@@ -646,7 +664,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         keep_t = np.concatenate(([True], later))
         ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, c, drive.chambers.area_ratio, L, field_at)
-    drive.chambers.check_volumes(-(piece.y[:, :weights.size] @ weights), t, _OVERTRAVEL)
+    if M > 1 or not _within(piece.y[:, :M], weights, drive.chambers):
+        drive.chambers.check_volumes(-(piece.y[:, :weights.size] @ weights), t, _OVERTRAVEL)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
