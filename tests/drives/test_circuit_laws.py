@@ -176,12 +176,14 @@ def test_the_blow_against_the_frozen_force():
     assert abs(res.record.work_on_rock - frozen.work_on_rock) > 1e-4 * frozen.work_on_rock
 
 
-@pytest.mark.parametrize("law", [rock(2.0, cells=8), "wave"])
+@pytest.mark.parametrize("law", [rock(2.0, cells=8), rock(2.0, cells=8, driven_end="free"), "wave"])
 def test_the_energy_accounts_of_a_run_with_blows(law):
     """The circuit's account closes to rounding; the piston's (its energy's change, the work the drive
     did along its integration, what the blows took) to the integrator's tolerance: 1e-8 at the drive's
     ``rtol = 1e-10``, 2e-10 at ``1e-12`` (measured 1.0e-8 and 2.2e-10 under the rod-rock law, 7.0e-9
-    and 1.6e-10 under the wave law); the records are the law's, one a blow."""
+    and 1.6e-10 under the wave law; with the blows ended where the piston is free for good, the
+    default, 2.1e-7 and 5.0e-9: the same fall with the tolerance, on another run); the records are the
+    law's, one a blow."""
     from impactbar.drives import FlightSettings
     from impactbar.simulation.blows import BlowPiece
     from impactbar.simulation.driven import run_stateful
@@ -206,7 +208,9 @@ def test_the_energy_accounts_of_a_run_with_blows(law):
             assert np.array_equal(h["p_r"][inside], z[1]) and np.array_equal(h["x_v"][inside], z[3])
         dropped = [b.account()[0] - b.account()[1] for b in blows]  # the lattice's averages' loss
         assert all(x >= -1e-15 for x in dropped) if law != "wave" else max(map(abs, dropped)) < 1e-10
-    assert residuals[0] < 1.5e-8 and residuals[1] < 5e-10
+    free = getattr(law, "driven_end", None) == "free"
+    assert residuals[0] < (3e-7 if free else 1.5e-8) and residuals[1] < (7e-9 if free else 5e-10)
+    assert residuals[0] / residuals[1] > 20.0  # (the integrator's tolerance, not a term left out)
 
 
 def test_the_energy_the_step_averages_drop_falls_with_the_cells():
