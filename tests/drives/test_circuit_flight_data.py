@@ -93,20 +93,29 @@ def test_the_least_volumes_are_the_least_of_the_volumes_to_the_bit(seed):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_a_rigid_pistons_volume_check_decides_as_the_volumes_arrays(seed):
-    """A rigid piston's flight checks its chambers from its coordinate's extremes (``flight._within``,
-    without the displacements' array): the same verdict as the least of the volumes' arrays over
-    ``w = -(weight x)``, a chamber emptied exactly (volume 0) among them, and no verdict for a
-    weight it cannot tell (``<= 0``)."""
+    """A rigid piston's flight checks its chambers from its coordinate's extremes
+    (``flight._displacements``, two displacements, not the array of all): the least volumes the same
+    to the bit as over the whole array ``w = -(weight x)``, so the same verdict, a chamber emptied
+    exactly (volume 0) among them; a weight it cannot tell (``<= 0``) and a flexible piston take the
+    whole array."""
     rng = np.random.default_rng(seed)
     ch = Chambers(float(rng.uniform(0.05, 0.95)), float(rng.uniform(0.1, 2.0)), float(rng.uniform(0.1, 2.0)))
     weight = float(rng.choice([1.0, rng.uniform(0.1, 3.0)]))
     x = rng.normal(0.0, 10.0 ** rng.uniform(-3, 0.5), size=int(rng.integers(1, 300)))
     lowest = -ch.rear_volume / weight  # (on the rear chamber's emptying, exactly where weight is 1)
     highest = ch.front_volume / (ch.area_ratio * weight)
+    verdicts = []
     for xs in (x, np.append(x, lowest), np.append(x, highest), np.append(x, 2 * lowest),
                np.append(x, 2 * highest)):
         w = -(xs[:, None] @ np.array([weight]))
         empties = np.min(ch.rear_volume - w) <= 0.0 or np.min(ch.front_volume + ch.area_ratio * w) <= 0.0
-        assert F._within(xs[:, None], np.array([weight]), ch) is (not empties)
-    assert F._within(x[:, None], np.array([-weight]), ch) is False
-    assert F._within(x[:, None], np.zeros(1), ch) is False
+        two = F._displacements(xs[:, None], np.array([weight]))
+        assert two.size == 2 and ch.least_volumes(two) == ch.least_volumes(w)
+        assert (min(ch.least_volumes(two)) > 0.0) is (not empties)
+        verdicts.append(empties)
+    assert verdicts[3] and verdicts[4]  # (twice beyond: both chambers' emptying seen)
+    for weights in (np.array([-weight]), np.zeros(1)):
+        assert np.array_equal(F._displacements(x[:, None], weights), -(x[:, None] @ weights))
+    flexible = np.column_stack((x, x[::-1]))
+    assert np.array_equal(F._displacements(flexible, np.array([weight, 0.5])),
+                          -(flexible @ np.array([weight, 0.5])))

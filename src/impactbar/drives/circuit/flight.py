@@ -422,18 +422,17 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     return int(flag), None, ts, Y, yend, [i for i, r in enumerate(roots.tolist()) if r]
 
 
-def _within(x, weights, chambers) -> bool:
-    """Whether a rigid piston's displacements ``w = -(x @ weights)`` (``x`` its modal coordinate at
-    the steps, shape ``(S, 1)``; ``weights`` its driven end's weight, shape ``(1,)``) leave both
-    chambers a volume (theory §11), as :meth:`~.parts.Chambers.check_volumes` finds them, without
-    the product's array: for a weight ``> 0`` the greatest displacement is ``-(weight min x)`` and the
-    least ``-(weight max x)``, the same floats (rounding is monotone); ``False`` where it cannot tell
-    (a weight ``<= 0``) or a chamber empties."""
-    (weight,) = weights.tolist()
-    if not weight > 0.0:
-        return False
-    return chambers.rear_volume + weight * float(x.min()) > 0.0 and \
-        chambers.front_volume - chambers.area_ratio * (weight * float(x.max())) > 0.0
+def _displacements(x, weights):
+    """The driven end's displacements ``w = -(x @ weights)`` over a flight's steps (``x`` the modal
+    positions there, shape ``(S, M)``; ``weights`` the driven end's, shape ``(M,)``) as
+    :meth:`~.parts.Chambers.check_volumes` reads them (theory §11): for a rigid piston of weight
+    ``> 0`` only their greatest and least, ``-(weight min x)`` and ``-(weight max x)`` (the product's
+    to the bit: rounding is monotone), without the product's array; else the product."""
+    if weights.size == 1:
+        (weight,) = weights.tolist()
+        if weight > 0.0:
+            return np.array((-(weight * float(x.min())), -(weight * float(x.max()))))
+    return -(x @ weights)
 
 
 def _integrate_explicit(code, par, settings, directions, y0, end, keep, spacing):
@@ -664,8 +663,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         keep_t = np.concatenate(([True], later))
         ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, c, drive.chambers.area_ratio, L, field_at)
-    if M > 1 or not _within(piece.y[:, :M], weights, drive.chambers):
-        drive.chambers.check_volumes(-(piece.y[:, :weights.size] @ weights), t, _OVERTRAVEL)
+    drive.chambers.check_volumes(_displacements(piece.y[:, :weights.size], weights), t, _OVERTRAVEL)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
