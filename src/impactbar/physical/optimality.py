@@ -195,16 +195,17 @@ def _jump(u, own, gradients, neighbours, names: list, reach: float) -> str:
     their ``gradients``, shape (1 + m, n)) to a design of ``neighbours`` ((scaled variables, figures))
     within ``reach``: text naming it, ``""`` where none (module docstring)."""
     worst, text = 0.0, ""
+    slopes = JUMP_RATIO * np.linalg.norm(gradients, axis=1)  # (each figure's, the same for every neighbour)
     for v, figures in neighbours:
         delta = np.asarray(v, dtype=float) - u
         d = float(np.linalg.norm(delta))
         if not 0.0 < d <= reach:
             continue
-        change = np.asarray(figures, dtype=float) - own
+        figures = np.asarray(figures, dtype=float)
+        change = figures - own
         predicted = gradients @ delta
         off = np.abs(change - predicted)
-        bound = np.maximum(JUMP_RATIO * np.linalg.norm(gradients, axis=1) * d,
-                           JUMP_FLOOR * np.maximum(np.abs(own), np.abs(np.asarray(figures, dtype=float))))
+        bound = np.maximum(slopes * d, JUMP_FLOOR * np.maximum(np.abs(own), np.abs(figures)))
         for i in np.flatnonzero(off > bound):
             ratio = off[i] / bound[i]
             if ratio > worst:
