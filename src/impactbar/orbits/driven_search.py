@@ -135,8 +135,10 @@ def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, new
     if coarse is None or not hasattr(problem, "polish"):
         return None
     try:
-        rough = find_driven_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton,
-                                    settings=settings)
+        rough_problem = orbit_problem(coarse, drive, 1, settings, newton=newton)
+        # (its monodromy only starts the chord: its blows' columns by forward differences)
+        rough_problem.forward_blows = True
+        rough = default_orbit(coarse, drive, rough_problem, tol, max_iter)
         return _motion(orbit_of(problem, problem.polish(rough, tol, max_iter)))
     except ValueError:
         return None
