@@ -153,10 +153,11 @@ def test_the_exact_blows_multipliers_do_not_depend_on_the_step(rock_drifter, mon
     to their own noise. The exact coupled blow's noise (some 1e-11 of the state) over the central
     differences' step: at the exact blows' step (``FD_STEP_EXACT_BLOW``, 1e-3) the multipliers are the
     tangent's to 2e-7 (measured 4.7e-9), and those at a step 3.3 times smaller too (measured 9e-8
-    from the step 1e-3: the smaller step's noise); at a tenth of the lattice's step (1e-6) the noise
-    over the step moves them by 2.9e-7 from the tangent's (measured; main's differences alike 3.0e-7
-    from the step 1e-3's, which this test once required to be above 1e-6: 5e-7 to 1.1e-6 at 1e-5
-    before the drive's spurious steps were removed)."""
+    from the step 1e-3: the smaller step's noise); at a hundredth of the lattice's step (1e-7) the
+    noise over the step moves them by 4.0e-7 from the tangent's (measured; at a tenth, 1e-6, by
+    2.9e-7 and, from the lattice orbit started at 8 cells, by 3.7e-8: at one step the noise's size is
+    chance; this test once required above 1e-6 at 1e-5, 5e-7 to 1.1e-6 before the drive's spurious
+    steps were removed)."""
     import dataclasses
 
     import impactbar as ib
@@ -178,7 +179,7 @@ def test_the_exact_blows_multipliers_do_not_depend_on_the_step(rock_drifter, mon
     np.testing.assert_allclose(default, tangent, rtol=0, atol=2e-7)
     monkeypatch.setattr(OC, "FD_STEP_EXACT_BLOW", 3e-4)
     np.testing.assert_allclose(largest(), tangent, rtol=0, atol=2e-7)
-    monkeypatch.setattr(OC, "FD_STEP_EXACT_BLOW", OC.FD_STEP_BLOW / 10)  # noise over the step
+    monkeypatch.setattr(OC, "FD_STEP_EXACT_BLOW", OC.FD_STEP_BLOW / 100)  # noise over the step
     assert np.max(np.abs(largest() - tangent)) > 5e-8
 
 
@@ -198,8 +199,11 @@ def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
     the window-started polish's to the order of that polish's own spread: started 1e-6 or 1e-4 away,
     the window-started polish moves the figures by up to 4.9e-10 and the two largest multipliers by
     up to 9.7e-10 (measured; the chord stops at 1e-9); the new start moves them 5.6e-10 and 1.8e-10
-    (measured). And its root is the exact problem's: a full Newton step from it moves the unknowns
-    by less than 2e-9 of their size."""
+    (measured). The lattice orbit is found from the orbit at 8 cells (``RodRock.coarse_start``: a
+    chord of 3 steps, not the settling at the lattice's own grid) and its monodromy takes the blows'
+    forward differences: the same 4 exact blows, the figures 1.3e-10 to 3.0e-10 and the largest
+    multiplier 8.1e-10 from the orbit found without them (measured). And its root is the exact
+    problem's: a full Newton step from it moves the unknowns by less than 2e-9 of their size."""
     import dataclasses
     import tomllib
 
@@ -212,20 +216,27 @@ def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
     model = drifter.model()
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
     assert exact.law.coarse_model(exact).law.driven_end == "free"
+    first = exact.law.coarse_start(exact).law  # (the lattice orbit's start: 8 cells, ending free)
+    assert (first.method, first.cells_per_piston, first.driven_end) == ("lattice", 8, "free")
+    assert model.law.coarse_start(model) is None  # (lattice blows: no coarse model, no start)
     auto = model.with_(impact=dataclasses.replace(model.law, method="auto", cells_per_piston=None))
     assert auto.law.coarse_model(auto).law.driven_end == auto.law.driven_end  # (its own blows' end)
     count = _counted_exact_blows(monkeypatch)
-    steering = []  # (the lattice's blow Jacobians by forward differences: the steering ones)
+    lattice = []  # (the lattice's blow Jacobians: whether by forward differences)
     real = OC.blow_jacobian
 
     def jacobian(model, *args, forward=None, **kwargs):
-        steering.append(forward is not None and model.law.method == "lattice")
+        if model.law.method == "lattice":
+            lattice.append(forward is not None)
         return real(model, *args, forward=forward, **kwargs)
 
     monkeypatch.setattr(OC, "blow_jacobian", jacobian)
     orbit = find_orbit(exact, drifter.drive())
     assert count[0] <= 4
-    assert sum(steering) == 1  # the lattice orbit's chord's; the polish's is its monodromy's (not again)
+    # the lattice's Jacobians all by forward differences (five blows each, not ten): the 8 cells'
+    # chord's and monodromy's, then the lattice orbit's monodromy (its chord from the 8 cells' orbit
+    # takes that one), which only starts the polish's chord; the polish's Jacobian is it (not again)
+    assert lattice == [True, True, True]
     point = CircuitDrifterOrbit(drifter, orbit)
     rock = point.rock()
     mu = np.sort(np.abs(np.asarray(orbit.multipliers)))[::-1][:2]

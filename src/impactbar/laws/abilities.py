@@ -254,6 +254,23 @@ class NewtonStart:
         """
         return None
 
+    def coarse_start(self, model):
+        """A cheaper model still, whose orbit starts the chord to :meth:`coarse_model`'s orbit (in
+        place of that model's settling from rest), or ``None`` (the default): e.g. the rod-rock law's
+        lattice at 8 cells a piston for the exact blows' lattice at its own grid.
+
+        Parameters
+        ----------
+        model : BarModel
+            The model whose :meth:`coarse_model` this one starts (under this law).
+
+        Returns
+        -------
+        BarModel or None
+            The model at the chain's cheap end; ``None``: that model settles from rest itself.
+        """
+        return None
+
     def impact_state(self, model, load, t: float, y_minus):
         """The state where the next flight starts, ``y_plus`` of
         :meth:`~impactbar.laws.ContactLaw.impact_map` without its derivatives (a residual of the

@@ -131,15 +131,33 @@ def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, new
     (:meth:`~impactbar.orbits.driven.ShootingProblem.polish`); ``None`` where there is no such
     model, or no orbit on it, or the polish does not converge (the default chain on this model then
     answers)."""
-    coarse = newton_start(model.law).coarse_model(model) if getattr(problem, "coupled", False) else None
+    start = newton_start(model.law)
+    coarse = start.coarse_model(model) if getattr(problem, "coupled", False) else None
     if coarse is None or not hasattr(problem, "polish"):
         return None
     try:
-        rough = find_driven_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton,
-                                    settings=settings)
+        rough = _coarse_orbit(coarse, start.coarse_start(model), drive, tol, max_iter, newton, settings)
         return _motion(orbit_of(problem, problem.polish(rough, tol, max_iter)))
     except ValueError:
         return None
+
+
+def _coarse_orbit(coarse: BarModel, first, drive, tol: float, max_iter: int, newton: str, settings=None):
+    """:func:`_from_coarse`'s orbit on ``coarse``: polished from the orbit of ``first`` (a cheaper
+    model still, :meth:`~impactbar.laws.abilities.NewtonStart.coarse_start`; its default chain)
+    where given and that polish converges, else by the default chain on ``coarse``. Its monodromy
+    only starts a chord: its blows' columns by forward differences (``forward_blows``)."""
+    problem = orbit_problem(coarse, drive, 1, settings, newton=newton)
+    problem.forward_blows = True
+    if first is not None:
+        lower = orbit_problem(first, drive, 1, settings, newton=newton)
+        lower.forward_blows = True
+        try:
+            rough = default_orbit(first, drive, lower, tol, max_iter)
+            return _motion(orbit_of(problem, problem.polish(rough, tol, max_iter)))
+        except ValueError:
+            pass
+    return default_orbit(coarse, drive, problem, tol, max_iter)
 
 
 #: The slowest arrival at the stop that is a blow (the simulator's ``REST_SPEED``: a slower rebound

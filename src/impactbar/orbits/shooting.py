@@ -128,6 +128,8 @@ class ShootingProblem(OrbitProblem):
 
     default_start = "the motion from rest on the stop, followed until its impacts settle"
     starts_from_rest = True
+    #: the coupled blows' columns of the multipliers' Jacobian by forward differences (half the blows)
+    forward_blows = False
 
     def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None,
                  *, newton: str = "chord"):
@@ -265,7 +267,8 @@ class ShootingProblem(OrbitProblem):
                 return out, t_after, after.mode, arrival, pieces, events, None
             if variational:
                 G = blow_jacobian(model, drive, t, q, v, state, blow_settings,
-                                  forward=out if variational == "steer" else None, blow=(res, after))
+                                  forward=out if variational == "steer" or self.forward_blows else None,
+                                  blow=(res, after))
                 return out, t_after, after.mode, arrival, pieces, events, G @ D
             return out, t_after, after.mode, arrival, pieces, events
         if law.traits.restitution_in_kernel:
