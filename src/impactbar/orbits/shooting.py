@@ -371,8 +371,9 @@ class ShootingProblem(OrbitProblem):
         speeds = []
         iterates = 1  # consecutive iterates of the map at the end of hist
         # the motion is followed only to hand Newton a start: where Newton's flights are the
-        # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
-        loose = self._loose() if self.variational else None
+        # variational ones, at a looser tolerance (SETTLE_RTOL, or ROOT_SETTLE_RTOL where the chord's
+        # plain flights are the root's; Newton's own flights keep the drive's)
+        loose = C.settle_settings(self, self._loose() if self.variational else None)
         budget, count = n_max, 0
         other, self.settled_into = self.variational and m == 1 and n_max > m, None
         while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
