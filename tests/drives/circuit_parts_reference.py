@@ -212,7 +212,8 @@ def network_jacobian_fd(y, par, M, n, n_energy):
 def both_ways(y, gap, par, M, n, n_energy, n_events, gen=None):
     """The network's vector field, event functions and Jacobian at ``y`` (``gap`` the piston's gap,
     ``-q_0``) by the interpreter (:mod:`network_interpreter`) and by the code generated for its
-    topology (``gen``, generated from ``par`` where ``None``), asserted the same to the bit:
+    topology (``gen``, generated from ``par`` where ``None``; its ``rates`` too, the field and the
+    Jacobian from one pass), asserted the same to the bit:
     ``(out, g, A, gen)``, the interpreter's three and the generated module."""
     import network_interpreter as NI
 
@@ -234,4 +235,7 @@ def both_ways(y, gap, par, M, n, n_energy, n_events, gen=None):
     NI.jac_base(y, par, M, A)
     gen.jac_base(y, par, M, A2)
     assert np.array_equal(bits(A2), bits(A))
+    out3, A3 = np.full_like(out, np.nan), np.full_like(A, np.nan)
+    gen.rates(y, par, M, out3, A3)  # (both at once: the variational equations' right-hand side's)
+    assert np.array_equal(bits(out3), bits(out)) and np.array_equal(bits(A3), bits(A))
     return out, g, A, gen

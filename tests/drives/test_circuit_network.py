@@ -98,6 +98,9 @@ def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_mod
             assert np.array_equal(_bits(got2), _bits(want)), (mode, got2 - want)
             assert np.array_equal(_bits(B2), _bits(A)), (mode, np.argwhere(_bits(B2) != _bits(A)))
             assert np.array_equal(_bits(h2), _bits(g)), (mode, h2, g)
+            got3, B3 = np.full_like(got, np.nan), np.full_like(B, np.nan)
+            gen.rates(y, net, M, got3, B3)  # (both at once: the variational right-hand side's)
+            assert np.array_equal(_bits(got3), _bits(want)) and np.array_equal(_bits(B3), _bits(A)), mode
             checked += 1
     assert checked == N_STATES * (8 if drive.supply.held else 16)
 
@@ -240,6 +243,9 @@ def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_mode
             NI.jac_base(y, par, M, A)
             gen.jac_base(y, par, M, A2)
             assert np.array_equal(_bits(A2), _bits(A)), (mode, np.argwhere(_bits(A2) != _bits(A)))
+            out3, A3 = np.full_like(out, np.nan), np.full((n, n), np.nan)
+            gen.rates(y, par, M, out3, A3)
+            assert np.array_equal(_bits(out3), _bits(out)) and np.array_equal(_bits(A3), _bits(A)), mode
             fd = network_jacobian_fd(y, par, M, n, N_EN)
             scale = np.max(np.abs(A), axis=1, keepdims=True)
             assert np.allclose(A, fd, rtol=1e-6, atol=1e-7 * scale), (mode, np.max(np.abs(A - fd)))

@@ -5,6 +5,7 @@ map's iterates) instead of followed for a hundred impacts."""
 import numpy as np
 import pytest
 
+import impactbar.orbits._closing as C
 import impactbar.orbits._settling as settling
 import impactbar.orbits.shooting as S
 from impactbar import find_orbit
@@ -77,7 +78,7 @@ def test_the_accelerated_start_finds_the_same_operating_point_in_fewer_flights(m
     fast = find_orbit(model, drive)
     n_fast, count[0] = count[0], 0
     monkeypatch.setattr(settling, "DOMINANT_FIT", 0.0)
-    monkeypatch.setattr(S, "SETTLE_RTOL", 1e-10)
+    monkeypatch.setattr(C, "SETTLE_RTOL", 1e-10)
     slow = find_orbit(model, drive)
     assert fast.stable and slow.stable
     assert fast.period == pytest.approx(slow.period, rel=1e-8)
@@ -135,7 +136,7 @@ def test_a_flexible_orbit_starts_three_impacts_after_the_rigid_orbit(monkeypatch
 
     def spy(self, tau, mode, y, **kw):
         s = kw.get("settings")
-        if self.M > 1 and s is not None and s.rtol == S.SETTLE_RTOL and not kw.get("variational"):
+        if self.M > 1 and s is not None and s.rtol == C.SETTLE_RTOL and not kw.get("variational"):
             loose.append(tau)
         return fly(self, tau, mode, y, **kw)
 

@@ -26,8 +26,10 @@ import numpy as np
 from ..drives.orbitproblem import at_rounding_floor, step_size
 
 __all__ = ["SETTLE_HANDOVER", "SETTLE_LIFTED", "SETTLE_RTOL", "CLOSING_HANDOVER", "LIFTED_HANDOVER",
-           "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "ROOT_HANDOVER", "LOOSE_FIRST", "close",
-           "checked_root", "root_settings", "settle_handover", "first_residual"]
+           "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "ROOT_HANDOVER", "LOOSE_FIRST",
+           "ROOT_SETTLE_RTOL", "close", "checked_root", "root_settings", "settle_handover", "loose_settings",
+           "settle_settings",
+           "first_residual"]
 
 #: How closely the impact velocities of the motion followed to a start agree, impact after impact,
 #: before Newton's method takes over (a drive whose flights integrate the variational equations).
@@ -77,6 +79,16 @@ ROOT_HANDOVER = 3e-4
 #: the residual's error, never ends the chord at that residual's root (the chord's tolerance, 1e-9 at
 #: the drive's, being far below it); its next steps take the root's flights and correct that error.
 LOOSE_FIRST = 1e-6
+#: The integrator's relative tolerance while the motion is followed to a start where the chord's plain
+#: flights are the orbit's root's (:func:`settle_settings`), in place of :data:`SETTLE_RTOL` (1e-7;
+#: ``atol`` scaled as much). That motion only leads to the hand-over (its impact velocities agreeing to
+#: :data:`ROOT_HANDOVER`, 3e-4) and the drift's tests (1e-4); the root is the chord's. On the spool
+#: drill (``examples/circuit_drill_spool.toml``) its impact velocities lie 0.8e-5 to 3.0e-5 (relative)
+#: from those at 1e-7, changing by at most 1.3e-5 from one impact to the next (3e-6: 0.3e-5 to 0.75e-5;
+#: 1e-4: 1.5e-4 to 2.9e-4, at the tests' own size), the same 8 impacts followed, 6,435 of the orbit's
+#: 27,778 CVODE steps saved and the orbit as near one at ``rtol = 1e-12`` (1.4e-10 of the unknowns,
+#: 1.3e-10 before; ``benchmarks/HISTORY.md``).
+ROOT_SETTLE_RTOL = 1e-5
 
 _UNSET = object()
 
@@ -123,6 +135,45 @@ def settle_handover(problem, default: float) -> float:
     float
     """
     return ROOT_HANDOVER if root_settings(problem) is not None else default
+
+
+def loose_settings(settings):
+    """The integrator at :data:`SETTLE_RTOL` (its ``atol`` scaled as much): the flights that only lead
+    to Newton's start or steer it.
+
+    Parameters
+    ----------
+    settings : FlightSettings
+        The drive's flights (the orbit's tolerance).
+
+    Returns
+    -------
+    FlightSettings
+        ``settings`` with ``rtol`` at least :data:`SETTLE_RTOL`.
+    """
+    return dataclasses.replace(settings, rtol=max(settings.rtol, SETTLE_RTOL),
+                               atol=max(settings.atol, SETTLE_RTOL * settings.atol / settings.rtol))
+
+
+def settle_settings(problem, loose):
+    """The integrator of the motion followed to a start of ``problem`` (``loose`` its flights at
+    :data:`SETTLE_RTOL`, ``None`` for a drive without variational flights): at
+    :data:`ROOT_SETTLE_RTOL` (``atol`` scaled as much) where the chord's plain flights are the orbit's
+    root's (:func:`root_settings`), else ``loose`` itself.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    loose : FlightSettings or None
+        The flights at the loose tolerance (:func:`loose_settings`).
+
+    Returns
+    -------
+    FlightSettings or None
+    """
+    if loose is None or root_settings(problem) is None or loose.rtol >= ROOT_SETTLE_RTOL:
+        return loose
+    return dataclasses.replace(loose, rtol=ROOT_SETTLE_RTOL, atol=ROOT_SETTLE_RTOL * loose.atol / loose.rtol)
 
 
 def first_residual(problem, X, steer, r):

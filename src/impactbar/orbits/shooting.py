@@ -23,7 +23,7 @@ from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..drives.orbitproblem import OrbitData, OrbitProblem, StalledIteration, chord, newton
 from ..model import BarModel
 from . import _closing as C
-from ._closing import SETTLE_HANDOVER, SETTLE_LIFTED, SETTLE_RTOL, checked_root, close
+from ._closing import SETTLE_HANDOVER, SETTLE_LIFTED, checked_root, close
 from ._saltation import map_jacobian, through
 from ._settling import (
     DRIFT_AHEAD,
@@ -374,8 +374,9 @@ class ShootingProblem(OrbitProblem):
         speeds = []
         iterates = 1  # consecutive iterates of the map at the end of hist
         # the motion is followed only to hand Newton a start: where Newton's flights are the
-        # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
-        loose = self._loose() if self.variational else None
+        # variational ones, at a looser tolerance (SETTLE_RTOL, or ROOT_SETTLE_RTOL where the chord's
+        # plain flights are the root's; Newton's own flights keep the drive's)
+        loose = C.settle_settings(self, C.loose_settings(self.settings) if self.variational else None)
         budget, count = n_max, 0
         other, self.settled_into = self.variational and m == 1 and n_max > m, None
         while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
@@ -524,7 +525,7 @@ class ShootingProblem(OrbitProblem):
         ``SETTLE_RTOL`` (its residual the chord's first where :func:`._closing.first_residual` lets
         it), the plain flights' root (with ``handover``, the iterate after a Newton step of at most that
         size) and the last Jacobian."""
-        steer = self._steer(self._loose())
+        steer = self._steer(C.loose_settings(self.settings))
         r, first = self.residual(X, settings=steer, steer=True)
         r = C.first_residual(self, X, steer, r)  # (the chord's first residual, where it may be this)
         return self._chord(X, first, tol, max_iter, r, handover, first_here=True)
@@ -643,13 +644,6 @@ class ShootingProblem(OrbitProblem):
         (``STEER_THETA``; a drive whose variational flights integrate ``Phi`` beside the state, the
         rigid piston's CVODE, reads none)."""
         return dataclasses.replace(settings, magnus_theta=STEER_THETA)
-
-    def _loose(self) -> FlightSettings:
-        """The integrator at ``SETTLE_RTOL`` (its ``atol`` scaled as much): the flights that only lead
-        to Newton's start or steer it."""
-        s = self.settings
-        return dataclasses.replace(s, rtol=max(s.rtol, SETTLE_RTOL),
-                                   atol=max(s.atol, SETTLE_RTOL * s.atol / s.rtol))
 
     def unknowns(self, orbit):
         """The unknowns of a found orbit of this problem."""

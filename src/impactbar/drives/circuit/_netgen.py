@@ -4,7 +4,9 @@ r"""Straight-line code for a network of part records (:mod:`._network`), one mod
 ``jac_base(y, par, M, A)`` and ``events(z, par, M, g, first)``, that do what the interpreter of any
 network (the tests' ``network_interpreter.base``, ``jac_base``, ``events``) does for one network: the
 loops over the records unrolled, each record's terms written out in the same order of operations (so that the
-numbers are the same to the bit), the nodes' scratch kept in local variables instead of an array.
+numbers are the same to the bit), the nodes' scratch kept in local variables instead of an array;
+and ``rates(y, par, M, out, A)``, ``base``'s and ``jac_base``'s numbers from one pass over the records
+(the variational equations' right-hand side wants both at each call).
 
 What the source holds is the network's *topology*: the kinds of its records and their order, the
 nodes each names, how many nodes have a state, which chambers and accumulators sit on which node, the
@@ -146,11 +148,12 @@ def flight_rhs(t, y, yp, par):
     """CVODE's right-hand side for this topology."""
     M = int(par[NM])
     n = 2 * M + NS + 1
-    base(y, par, M, yp)
-    if par[VAR] > 0.5:
+    if par[VAR] > 0.5:  # (base's and jac_base's numbers from one pass: rates)
         A = np.empty((n, n))
-        jac_base(y, par, M, A)
+        rates(y, par, M, yp, A)
         phi_rate(A, y, yp, n + NEN)
+    else:
+        base(y, par, M, yp)
 
 
 @nb.njit(**_JIT)
@@ -270,8 +273,8 @@ if CV is not None:
 
 
 _MEMO: dict = {}
-_NAMES = ("base", "jac_base", "events", "flight_rhs", "flight_jac", "flight_events", "field_at", "magnus_phi",
-          "dop853_fly", "CALLBACKS")
+_NAMES = ("base", "jac_base", "rates", "events", "flight_rhs", "flight_jac", "flight_events", "field_at",
+          "magnus_phi", "dop853_fly", "CALLBACKS")
 
 
 def _callees() -> str:
@@ -423,21 +426,28 @@ def _start():
 
 
 def _base(t):
-    L = ["@nb.njit(**_JIT)", "def base(y, par, M, out):"] + _start() + _prepare(t, True)
-    L += ["    d = par[DAMP]", "    for i in range(M):", "        out[i] = y[M + i]",
-          "        out[M + i] = force - d * y[M + i] - par[HEAD + M + i] * y[i]",
-          f"    out[F + {t.ns}] = rate"]
+    return ["@nb.njit(**_JIT)", "def base(y, par, M, out):"] + _start() + _prepare(t, True) + _out(t)
+
+
+def _out(t):
+    """``base``'s lines that write the vector field from :func:`_prepare`'s locals into ``out``."""
+    L = ["    d = par[DAMP]", "    for i in range(M):", "        out[i] = y[M + i]",
+         "        out[M + i] = force - d * y[M + i] - par[HEAD + M + i] * y[i]",
+         f"    out[F + {t.ns}] = rate"]
     L += [f"    out[F + {j}] = dp{j}" for j in range(t.ns)]
-    L += [f"    out[F + {t.ns + 1 + k}] = e{k}" for k in range(t.nen)]
-    return L
+    return L + [f"    out[F + {t.ns + 1 + k}] = e{k}" for k in range(t.nen)]
 
 
-def _jac(t):
+def _jac(t, rates=False):
+    """``jac_base``'s lines; with ``rates``, those of ``rates(y, par, M, out, A)``: ``base``'s and
+    ``jac_base``'s at once from one :func:`_prepare` (its locals are the same with or without the
+    energies', so each number is theirs to the bit), for the variational equations' right-hand side."""
     ns = t.ns
-    L = ["@nb.njit(**_JIT)", "def jac_base(y, par, M, A):"] + _start()
+    head = "def rates(y, par, M, out, A):" if rates else "def jac_base(y, par, M, A):"
+    L = ["@nb.njit(**_JIT)", head] + _start()
     L += [f"    n = F + {ns + 1}", f"    X = F + {ns}", "    for i in range(n):",
           "        for j in range(n):", "            A[i, j] = 0.0"]
-    L += _prepare(t, False)
+    L += _prepare(t, rates) + (_out(t) if rates else [])
     L += ["    d = par[DAMP]", "    for i in range(M):", "        A[i, M + i] = 1.0",
           "        A[M + i, i] = -par[HEAD + M + i]", "        A[M + i, M + i] = -d"]
 
@@ -611,7 +621,7 @@ def emit(net) -> str:
     True
     """
     t = _Topology(net)
-    parts = ["\n".join(f(t)) + "\n" for f in (_base, _jac, _events)]
+    parts = ["\n".join(f(t)) + "\n" for f in (_base, _jac, _events, lambda t: _jac(t, True))]
     flight = _FLIGHT.format(ns=t.ns, nen=t.nen, nev=_bar.RAMP_EV + t.nev, net=NW_SIZE + REC_SIZE * t.nrec)
     return "\n\n".join([_HEADER.format(callees=_callees())] + parts) + flight + _dop853.SOURCE
 
@@ -637,7 +647,8 @@ def generate(net, folder=None) -> SimpleNamespace:
     Returns
     -------
     types.SimpleNamespace
-        ``base(y, par, M, out)``, ``jac_base(y, par, M, A)``, ``events(z, par, M, g, first)`` (the
+        ``base(y, par, M, out)``, ``jac_base(y, par, M, A)``, ``rates(y, par, M, out, A)`` (both at
+        once), ``events(z, par, M, g, first)`` (the
         signatures of :mod:`._network`'s, ``par`` with the network after the bar's entries), ``source``,
         ``path`` (``None`` in memory) and ``module`` (the module's name).
 
@@ -655,7 +666,7 @@ def generate(net, folder=None) -> SimpleNamespace:
     >>> g = generate(NW.compose(nodes + Valve(0.05, 1.0).records(0, 1, 1, 0.01), 1, 1, 1, 0))
     >>> sorted(k for k in vars(g) if not k.startswith("_"))  # doctest: +NORMALIZE_WHITESPACE
     ['CALLBACKS', 'base', 'dop853_fly', 'events', 'field_at', 'flight_events', 'flight_jac', 'flight_rhs',
-     'jac_base', 'magnus_phi', 'module', 'path', 'source']
+     'jac_base', 'magnus_phi', 'module', 'path', 'rates', 'source']
     """
     return load(emit(net), folder, "impactbar_netgen", _NAMES)
 
