@@ -247,3 +247,30 @@ def test_a_subclass_with_its_own_evaluation_gets_no_compiled_view():
     assert compiled_kind(SquareWaveLoad(1.0, 1.2), "__call__") == PIECEWISE
     assert compiled_kind(Shifted(0.3, 1.0), "flow") == FOURIER == compiled_kind(Shifted(0.3, 1.0))
     assert compiled_kind(Shifted(0.3, 1.0), "__call__", "flow") is None
+
+
+def test_loads_differing_only_in_the_mean_share_their_transfer_functions():
+    """``H_nk p_k`` does not depend on ``p0``: a chart's load factors (a new load each) share it, the
+    same floats as each load's own ``p_k / (w^2 + i k d - k^2)`` (eq. 8), and the periodic state and
+    flow of each load the same bits as with nothing shared; a resonance is refused for every load."""
+    from impactbar.loads import fourier
+
+    w2 = (3.3 * np.pi * np.arange(9)) ** 2
+    d = 0.02
+    a, b = CosineLoad(0.3, 1.0, 10), CosineLoad(0.7, 1.0, 10)
+    ha = a._transfer(w2, d)
+    assert b._transfer(w2, d) is ha
+    k = np.array([10.0])
+    np.testing.assert_array_equal(ha, 1.0 / (w2[:, None] + 1j * k * d - k**2))
+    q = np.zeros(9)
+    shared = b.periodic_state(w2, d, [0.4]), b.flow(w2, d, 0.4, q + 0.1, q - 0.2)([1.0, 5.0])
+    fourier._SHARED_TRANSFERS.clear()
+    fresh = CosineLoad(0.7, 1.0, 10)
+    alone = fresh.periodic_state(w2, d, [0.4]), fresh.flow(w2, d, 0.4, q + 0.1, q - 0.2)([1.0, 5.0])
+    for x, y in zip(shared, alone, strict=True):
+        for u, v in zip(x, y, strict=True):
+            np.testing.assert_array_equal(u, v)
+    res = np.array([0.0, 9.0])  # w^2 = k^2 = 9 undamped
+    for p0 in (0.1, 0.2):
+        with pytest.raises(ValueError, match="undamped resonance"):
+            CosineLoad(p0, 1.0, 3)._transfer(res, 0.0)

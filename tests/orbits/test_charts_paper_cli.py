@@ -75,6 +75,31 @@ def test_sign_changes_evaluate_each_point_once():
     assert max(seen.values()) == 1
 
 
+@pytest.mark.parametrize("h", [
+    lambda x: (x - 0.3) * (x - 1.1) * (x + 0.7),                   # three brackets: the top one's root
+    lambda x: math.nan if x > 1.5 else (x - 0.3) * (x + 0.7),      # undefined on top: below it
+    lambda x: math.nan if 0.6 < x < 1.6 else (x - 0.2) * (x - 1.9),  # a gap between the roots
+    lambda x: x - 2.0,                                             # a zero at the scan's top
+    lambda x: (x - 0.5) * (x + 0.25),                              # zeros on scan points (step 0.25)
+    lambda x: x * x + 1.0,                                         # none
+])
+def test_the_last_sign_change_is_the_full_scans_last_root(h):
+    """``last=True`` scans from the top down: the full scan's last root to the bit (the same bracket,
+    the same Brent iterates), with no point below its bracket evaluated."""
+    seen = []
+
+    def rec(x):
+        seen.append(float(x))
+        return h(x)
+
+    full = find_sign_changes(h, -1.0, 2.0, n_scan=13)
+    last = find_sign_changes(rec, -1.0, 2.0, n_scan=13, last=True)
+    assert last == full[-1:]
+    assert all(type(r) is float for r in last)
+    if full:  # nothing evaluated below the bracket holding the last root
+        assert min(seen) >= full[-1] - 0.25
+
+
 def test_stability_edges_evaluate_each_load_factor_once(monkeypatch):
     """The scan, Brent's iterates and the root's classification share each load factor's
     multipliers; the edge is still eq. 39's."""

@@ -144,6 +144,20 @@ def test_wave_existence_edge_matches_the_orbits():
         assert periodic_orbits(model, CosineLoad(edge * (1 + 1e-7) / k, 1.0, k)) == []
 
 
+def test_wave_existence_edge_kept_per_model_is_the_computed_one():
+    """The edge is kept per model and order (a chart asks for it in every search): an equal model
+    built again gets the computed float to the bit, another restitution or order its own."""
+    from impactbar.laws.wave.periodic import _existence_edge, wave_existence_edge
+
+    model = BarModel(s=5.0, d=0.004, R=0.3, n_modes=3, impact="wave")
+    edge = wave_existence_edge(model, 3)
+    assert wave_existence_edge(BarModel(s=5.0, d=0.004, R=0.3, n_modes=3, impact="wave"), 3) == edge
+    assert _existence_edge.__wrapped__(model, 3) == edge
+    other = model.with_(R=0.4)
+    assert wave_existence_edge(other, 3) == _existence_edge.__wrapped__(other, 3) != edge
+    assert wave_existence_edge(model, 1) == _existence_edge.__wrapped__(model, 1) != edge
+
+
 def test_stability_edges_under_the_wave_law():
     """The rigid-limit band of the wave law tends to the paper's ``1/sqrt(4 + pi^2) .. 1/pi`` at
     ``R = 0`` (theory §6); the paper's Schur criterion is refused under the wave law."""

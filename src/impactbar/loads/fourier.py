@@ -17,6 +17,18 @@ from .base import TWO_PI, Load
 
 __all__ = ["FourierLoad", "CosineLoad"]
 
+#: ``H_nk p_k`` of :meth:`FourierLoad._transfer` by ``(d, w2, orders, p_k)``, read-only, the last
+#: 64: the same floats for every load with these harmonics, whatever its mean load
+_SHARED_TRANSFERS: dict = {}
+
+
+def _remember(cache: dict, key, value, size: int) -> None:
+    """``cache[key] = value``, the cache emptied first when it holds ``size`` entries (bounded;
+    ``clear()`` is atomic, so threads sharing a cache are safe)."""
+    if len(cache) >= size:
+        cache.clear()
+    cache[key] = value
+
 
 class FourierLoad(Load):
     r"""A load given by finitely many harmonics (eq. 7).
@@ -136,23 +148,27 @@ class FourierLoad(Load):
 
     def _transfer(self, w2, d):
         """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16); the last few
-        results are kept (read-only), since an orbit's computations ask for the same ones."""
+        results are kept (read-only), since an orbit's computations ask for the same ones. They do
+        not depend on the mean load ``p0``: loads that differ only in it (a chart's load factors,
+        a new load each) share them (:data:`_SHARED_TRANSFERS`)."""
         cache = self.__dict__.setdefault("_transfer_cache", {})
         key = (float(d), w2.tobytes())
         hp = cache.get(key)
         if hp is not None:
             return hp
-        den = w2[:, None] + 1j * self._k[None, :] * d - self._k[None, :] ** 2
-        if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, self._k[None, :] ** 2)):
-            raise ValueError(
-                "undamped resonance: a mode frequency s*n*pi equals a load harmonic k (eq. 16); "
-                "use d > 0 or move s"
-            )
-        hp = self._pk[None, :] / den
-        hp.flags.writeable = False
-        if len(cache) >= 8:  # bounded; clear() is atomic, so threads sharing a load are safe
-            cache.clear()
-        cache[key] = hp
+        shared = (*key, self._k.tobytes(), self._pk.tobytes())
+        hp = _SHARED_TRANSFERS.get(shared)
+        if hp is None:
+            den = w2[:, None] + 1j * self._k[None, :] * d - self._k[None, :] ** 2
+            if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, self._k[None, :] ** 2)):
+                raise ValueError(
+                    "undamped resonance: a mode frequency s*n*pi equals a load harmonic k (eq. 16); "
+                    "use d > 0 or move s"
+                )
+            hp = self._pk[None, :] / den
+            hp.flags.writeable = False
+            _remember(_SHARED_TRANSFERS, shared, hp, 64)
+        _remember(cache, key, hp, 8)
         return hp
 
     def periodic_state(self, w2, d, t):

@@ -15,8 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
+from .._shared.roots import brentq
 from ..laws.abilities import PhaseEquation, require
 from ..laws.paper.phase import pneumatic_existence_edge as pneumatic_existence_edge
 from ..loads import CosineLoad, Load, SquareWaveLoad
@@ -66,7 +66,7 @@ class Boundary:
 
 
 def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_scan: int = 24,
-                      xtol: float = 1e-12) -> list[float]:
+                      xtol: float = 1e-12, last: bool = False) -> list[float]:
     """Roots of a continuous scalar function on ``[lo, hi]``: scan, then Brent on each bracket.
 
     Parameters
@@ -74,15 +74,19 @@ def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_sc
     h : callable
         ``h(x) -> float``; NaN marks points where it is undefined (they break brackets).
     lo, hi : float
-        The interval.
+        The interval (the units of ``x``).
     n_scan : int
         Scan points.
     xtol : float
-        Absolute tolerance of each root.
+        Absolute tolerance of each root (the units of ``x``).
+    last : bool
+        Only the highest root (the last of the list): the scan then runs from ``hi`` down and stops
+        at the first bracket that holds one, evaluating ``h`` nowhere below it.
 
     Returns
     -------
     list of float
+        Increasing; with ``last``, that list's last root alone (or none), the same float.
 
     Notes
     -----
@@ -90,13 +94,16 @@ def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_sc
     read back instead of computed again (the same numbers, so the same iterates).
     """
     xs = np.linspace(lo, hi, n_scan)
-    hs = np.array([h(x) for x in xs])
-    scanned = dict(zip(xs.tolist(), hs.tolist(), strict=True))
+    scanned = {}
 
     def f(x):
         v = scanned.get(x)
         return h(x) if v is None else v
 
+    if last:
+        return _last_sign_change(h, f, xs, scanned, xtol)
+    hs = np.array([h(x) for x in xs])
+    scanned.update(zip(xs.tolist(), hs.tolist(), strict=True))
     out = []
     for a, b, ha, hb in zip(xs[:-1], xs[1:], hs[:-1], hs[1:], strict=True):
         if not (np.isfinite(ha) and np.isfinite(hb)):
@@ -108,6 +115,23 @@ def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_sc
     if np.isfinite(hs[-1]) and hs[-1] == 0.0:
         out.append(float(xs[-1]))
     return out
+
+
+def _last_sign_change(h, f, xs, scanned: dict, xtol: float) -> list[float]:
+    """:func:`find_sign_changes`' last root over the scan ``xs``, the scan taken from the top down
+    (``scanned`` filled for Brent's ``f``): the same tests on the same values, bracket by bracket."""
+    hb = scanned[float(xs[-1])] = float(h(xs[-1]))
+    if math.isfinite(hb) and hb == 0.0:
+        return [float(xs[-1])]
+    for i in range(xs.size - 2, -1, -1):
+        ha = scanned[float(xs[i])] = float(h(xs[i]))
+        if math.isfinite(ha) and math.isfinite(hb):
+            if ha == 0.0:
+                return [float(xs[i])]
+            if ha * hb < 0.0:
+                return [brentq(f, xs[i], xs[i + 1], xtol=xtol, rtol=8.9e-16)]
+        hb = ha
+    return []
 
 
 def max_phase_residual(model: BarModel, load: Load) -> float:
@@ -162,8 +186,8 @@ def _stable_branch_phase(model: BarModel, load: CosineLoad) -> float | None:
 
 def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "exact",
                               lf_min: float = 1e-3, n_scan: int = 24,
-                              xtol: float = 1e-12,
-                              bracket: tuple[float, float] | None = None) -> list[tuple[float, str]]:
+                              xtol: float = 1e-12, bracket: tuple[float, float] | None = None,
+                              last: bool = False) -> list[tuple[float, str]]:
     """Load factors ``k p0 / pk`` where the stable-branch orbit of the pneumatic load gains or loses
     stability, below the existence edge.
 
@@ -188,11 +212,15 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
         As in :func:`find_sign_changes`.
     bracket : (float, float), optional
         Search only this range of load factors (clipped to the existence edge).
+    last : bool
+        Only the highest edge (the one closest to the existence edge), as
+        :func:`find_sign_changes`' ``last``: the load factors below its bracket are not evaluated.
 
     Returns
     -------
     list of (float, str)
-        ``(load factor, kind)`` with kind ``"period-doubling"``, ``"fold"`` or ``"neimark-sacker"``.
+        ``(load factor, kind)`` with kind ``"period-doubling"``, ``"fold"`` or ``"neimark-sacker"``,
+        in increasing load factor.
 
     Raises
     ------
@@ -231,7 +259,7 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
         if not lo < hi:
             return []
     out = []
-    for lf in find_sign_changes(h, lo, hi, n_scan=n_scan, xtol=xtol):
+    for lf in find_sign_changes(h, lo, hi, n_scan=n_scan, xtol=xtol, last=last):
         m = mu(lf)
         crit = m[np.argmax(np.abs(m))]
         if abs(crit.imag) > 1e-6:
@@ -351,9 +379,9 @@ def pneumatic_stability_curve(model: BarModel, R_values, k: int = 1, *, criterio
         edges = []
         if prev is not None:  # continuation: a narrow bracket around the previous edge
             edges = pneumatic_stability_edges(m, k, criterion=criterion, n_scan=2, xtol=xtol,
-                                              bracket=(prev * 0.85, prev * 1.15))
+                                              bracket=(prev * 0.85, prev * 1.15), last=True)
         if not edges:
-            edges = pneumatic_stability_edges(m, k, criterion=criterion, n_scan=16, xtol=xtol)
+            edges = pneumatic_stability_edges(m, k, criterion=criterion, n_scan=16, xtol=xtol, last=True)
         prev = None
         if edges:
             *_, (prev, edge_kind) = edges

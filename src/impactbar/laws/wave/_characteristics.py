@@ -13,9 +13,9 @@ import math
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from ..._shared.columns import IV_HI, IV_LO
+from ..._shared.roots import brentq
 from ...dynamics.invariants import PistonInvariants
 from ...loads.abilities import jumps
 from . import _window as KW
@@ -75,6 +75,13 @@ class _Moments:
         return self.cum[k] + part
 
 
+def _window_rate(load, s: float) -> float:
+    """``k_max / s``: how fast the drive turns in window time ``theta = s t`` (0 without harmonics);
+    it sizes the panels of the window's moments and does not depend on the window's start."""
+    orders = load.abilities.orders
+    return float(np.max(orders)) / s if orders is not None and len(orders) else 0.0
+
+
 class _WindowLoad:
     """The drive load over the window as a function of ``theta = s (t - t0)``, ``0 <= theta <= 2``,
     with its jumps located once (so that a value at a jump is never decided by rounding)."""
@@ -85,8 +92,7 @@ class _WindowLoad:
         tj = np.asarray(jumps(load, t0, t1), dtype=float)  # (a load's jumps, a drive history's steps)
         self.t_edges = np.concatenate(([t0], tj, [t1]))
         self.jumps = s * (tj - t0)  # in theta, inside (0, 2)
-        orders = load.abilities.orders
-        self.rate = float(np.max(orders)) / s if orders is not None and len(orders) else 0.0
+        self.rate = _window_rate(load, s)
 
     def __call__(self, theta, left: bool = False) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
@@ -628,6 +634,8 @@ class _Contact:
         return out
 
     def _refine(self, k, sign):
+        from scipy.optimize import minimize_scalar  # here: scipy.optimize is a slow import
+
         g = self.grid
         best = float(self.force(g[k]))
         lo, hi = g[max(k - 1, 0)], g[min(k + 1, g.size - 1)]

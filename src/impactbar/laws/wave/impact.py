@@ -33,7 +33,16 @@ from ..._shared.columns import IV_HI
 from ...dynamics.compiled_views import FOURIER, PIECEWISE
 from ...dynamics.implementations import use_fast
 from . import _window as KW
-from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad, held_post_state, held_throughout
+from ._characteristics import (
+    _GL_W,
+    _GL_X,
+    _Contact,
+    _panels,
+    _window_rate,
+    _WindowLoad,
+    held_post_state,
+    held_throughout,
+)
 
 __all__ = ["WaveImpact", "wave_impact", "window_drive", "window_drives"]
 
@@ -156,8 +165,7 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
         drives = [window_drive(s, R, n_modes, load, float(t)) for t in t0s]
         return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
                 np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
-    first, *_ = t0s.tolist()  # (the load's rate does not depend on the start)
-    view, rate = tuple(own.kernel.view), _WindowLoad(load, s, first).rate
+    view, rate = tuple(own.kernel.view), _window_rate(load, s)
     mc, ms = _kernel_moments(view, s, rate, t0s, np.empty(0), n_modes + 1)
     (ca, cb), (sa, sb) = np.moveaxis(mc, 1, 0), np.moveaxis(ms, 1, 0)  # by the moments' order, start by start
     return _drive_parts(s, R, math.pi * np.arange(n_modes + 1), ca, cb, sa, sb)

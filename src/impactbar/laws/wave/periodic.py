@@ -33,8 +33,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import brentq
 
+from ..._shared.roots import brentq
 from ...dynamics import compiled as K
 from ...dynamics import monodromy as MD
 from ...dynamics.certified import cosine_roots
@@ -475,7 +475,18 @@ def wave_existence_edge(model: BarModelLike, k: int = 1) -> float:
     Returns
     -------
     float
+
+    Notes
+    -----
+    Kept for the last 256 models and orders (a model is immutable): a chart asks for the edge of
+    each model in every search of its stability edges.
     """
+    return _existence_edge(model, k)
+
+
+@functools.lru_cache(maxsize=256)
+def _existence_edge(model: BarModelLike, k: int) -> float:
+    """:func:`wave_existence_edge`, computed."""
     from ...loads import CosineLoad
 
     if _window(model).flight <= 0.0:
