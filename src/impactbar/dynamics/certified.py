@@ -14,7 +14,6 @@ import math
 import numpy as np
 
 from .._shared.columns import IV_HI, IV_LO
-from .._shared.roots import brentq
 
 TWO_PI = 2.0 * math.pi
 
@@ -116,6 +115,8 @@ def zeros_in_clusters(f, clusters, *, atol: float):
     list of tuple
         ``(t, multiplicity)`` with multiplicity 1 or 2, in increasing ``t``.
     """
+    from scipy.optimize import brentq, minimize_scalar  # here, not at the top: a slow import
+
     out = []
 
     def f1(t):
@@ -129,8 +130,6 @@ def zeros_in_clusters(f, clusters, *, atol: float):
         if np.sign(flo) * np.sign(fhi) < 0.0:  # signs, not the product: it underflows for denormals
             out.append((brentq(f1, lo, hi, xtol=1e-15, rtol=8.9e-16, maxiter=200), 1))
             continue
-        from scipy.optimize import minimize_scalar  # here, not at the top: a slow import
-
         sgn = 1.0 if flo > 0 else -1.0
         res = minimize_scalar(lambda t, s=sgn: s * f1(t), bounds=(lo, hi), method="bounded",
                               options={"xatol": 1e-13})

@@ -15,8 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
-from .._shared.roots import brentq
 from ..laws.abilities import PhaseEquation, require
 from ..laws.paper.phase import pneumatic_existence_edge as pneumatic_existence_edge
 from ..loads import CosineLoad, Load, SquareWaveLoad

@@ -13,9 +13,9 @@ import math
 from functools import cached_property
 
 import numpy as np
+from scipy.optimize import brentq, minimize_scalar
 
 from ..._shared.columns import IV_HI, IV_LO
-from ..._shared.roots import brentq
 from ...dynamics.invariants import PistonInvariants
 from ...loads.abilities import jumps
 from . import _window as KW
@@ -634,8 +634,6 @@ class _Contact:
         return out
 
     def _refine(self, k, sign):
-        from scipy.optimize import minimize_scalar  # here: scipy.optimize is a slow import
-
         g = self.grid
         best = float(self.force(g[k]))
         lo, hi = g[max(k - 1, 0)], g[min(k + 1, g.size - 1)]

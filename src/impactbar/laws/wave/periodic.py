@@ -33,8 +33,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from scipy.optimize import brentq
 
-from ..._shared.roots import brentq
 from ...dynamics import compiled as K
 from ...dynamics import monodromy as MD
 from ...dynamics.certified import cosine_roots

@@ -25,8 +25,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 
-from ..._shared.roots import brentq
 from .impact import modal_energy
 
 __all__ = ["SustainedContact", "rod_impedance", "sustained_contact"]
