@@ -104,14 +104,14 @@ class DrillString:
         no physics). Its orbits converge to the exact blows' at second order (theory §4d).
     method : {"auto", "exact", "lattice"}
         The simulator's blows (:class:`~impactbar.RodRock`'s ``method``): exact by default.
-    driven_end : {"free", "window"}
+    driven_end : {"free", "window"}, optional
         Where a lattice blow under the oil circuit ends (:class:`~impactbar.RodRock`'s
-        ``driven_end``, theory §11): where the piston is free for good (default), or at the law's
-        fixed window.
-    contact_events : {"step", "inside"}
+        ``driven_end``, theory §11): where the piston is free for good, or at the law's fixed
+        window. Default (``None``): the law's (``"free"``).
+    contact_events : {"step", "inside"}, optional
         Where the lattice's piston-shank separation and re-contact fall
-        (:class:`~impactbar.RodRock`'s ``contact_events``, theory §11): at step ends (default) or
-        inside their steps.
+        (:class:`~impactbar.RodRock`'s ``contact_events``, theory §11): at step ends or inside their
+        steps. Default (``None``): the law's (``"step"``).
     """
 
     segments: tuple
@@ -121,8 +121,8 @@ class DrillString:
     feed_N: float = 0.0
     cells_per_piston: int | None = None
     method: str = "auto"
-    driven_end: str = "free"
-    contact_events: str = "step"
+    driven_end: str | None = None
+    contact_events: str | None = None
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -139,9 +139,9 @@ class DrillString:
                                check_int("rock.cells_per_piston", self.cells_per_piston, lo=1, hi=4096))
         if self.method not in ("auto", "exact", "lattice"):
             raise ValueError(f"rock.method must be 'auto', 'exact' or 'lattice'; got {self.method!r}")
-        if self.driven_end not in ("free", "window"):
+        if self.driven_end not in (None, "free", "window"):
             raise ValueError(f"rock.driven_end must be 'free' or 'window'; got {self.driven_end!r}")
-        if self.contact_events not in ("step", "inside"):
+        if self.contact_events not in (None, "step", "inside"):
             raise ValueError(f"rock.contact_events must be 'step' or 'inside'; got {self.contact_events!r}")
 
     def law(self, bar, scales) -> RodRock:
@@ -160,11 +160,12 @@ class DrillString:
         edge = _Scaled(bar, scales)
         rock = BilinearRock(k=tree.convert("stiffness", edge, self.rock_k_N_m),
                             k_u=tree.convert("stiffness", edge, self.rock_k_u_N_m))
+        named = {key: value for key, value in (("driven_end", self.driven_end),
+                                                ("contact_events", self.contact_events)) if value is not None}
         return RodRock(segments=segs, rock=rock,
                        bit_mass=tree.convert("mass", edge, self.bit_mass_kg),
                        feed=tree.convert("force", edge, self.feed_N),
-                       cells_per_piston=self.cells_per_piston, method=self.method,
-                       driven_end=self.driven_end, contact_events=self.contact_events)
+                       cells_per_piston=self.cells_per_piston, method=self.method, **named)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (SI floats)."""
@@ -273,8 +274,7 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
     mass = tree.read_si("bit.mass", bit["mass"]) if "mass" in bit else 0.0
     return DrillString(segments=pieces, rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
                        cells_per_piston=rock.get("cells_per_piston"), method=rock.get("method", "auto"),
-                       driven_end=rock.get("driven_end", "free"),
-                       contact_events=rock.get("contact_events", "step"))
+                       driven_end=rock.get("driven_end"), contact_events=rock.get("contact_events"))
 
 
 def rock_blows(hammer, trajectory) -> dict:
