@@ -100,8 +100,10 @@ _FREE = (r"moved later by 10 % of the window the example's orbit moves X in the 
 _WINDOW = r"ended at the window \(`driven_end=\"window\"`\) and moved so, it moves X, X and X"
 
 
-def _example():
+def _example(**rock):
+    """The example's model and drive, with ``rock`` keys set in its ``[rock]`` table."""
     cfg, _ = read_config(str(ROOT / "examples" / "circuit_drifter_rock.toml"))
+    cfg["rock"].update(rock)
     h = build(cfg)
     return h.model(), h.drive()
 
@@ -125,8 +127,8 @@ def test_the_orbit_with_the_window_moved_later():
     moved later by 10 % of the window differ by less than theory §11 states (measured: the period
     1.3e-3, the impact velocity 2.7e-3, the work on the rock 5.6e-3; the bit lifted off the rock at
     both ends, the later end's flight from the piston's gap behind the shank's rest position)."""
-    model, drive = _example()
-    model = model.with_(impact=dataclasses.replace(model.law, driven_end="window"))
+    model, drive = _example(driven_end="window")  # (the config's key, a user's choice)
+    assert model.law == dataclasses.replace(_example()[0].law, driven_end="window")
     window = model.law.window(model)
     default = ib.find_orbit(model, drive)
     later_model = model.with_(impact=dataclasses.replace(model.law, blow_time=1.1 * window))

@@ -251,6 +251,16 @@ def test_the_blows_method_and_grid_in_a_config():
     lattice["rock"]["method"] = "cells"
     with pytest.raises(ValueError, match="rock.method"):
         physical.Hammer.from_config(lattice)
+    lattice["rock"].update(method="lattice", driven_end="window", contact_events="inside")
+    named = physical.Hammer.from_config(lattice)
+    assert (named.model.law.driven_end, named.model.law.contact_events) == ("window", "inside")
+    assert named.to_dict()["drill"]["driven_end"] == "window"
+    assert (lat.model.law.driven_end, lat.model.law.contact_events) == ("free", "step")  # (the law's defaults)
+    for key, bad in (("driven_end", "fixed"), ("contact_events", "steps")):
+        wrong = copy.deepcopy(lattice)
+        wrong["rock"][key] = bad
+        with pytest.raises(ValueError, match=f"rock.{key} must be"):
+            physical.Hammer.from_config(wrong)
     for bad in (0, "16", 1.5):
         cfg["rock"]["cells_per_piston"] = bad
         with pytest.raises(ValueError, match="rock.cells_per_piston"):

@@ -41,6 +41,7 @@ Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_confi
     [[rod.segments]] length, diameter | area, E, density   # with [rock]: the rod-rock law
     [bit]      mass                     # optional, default 0 kg
     [rock]     k, k_u, feed, method, cells_per_piston  # N/m, N/m, N (feed optional); the blows' method
+               driven_end, contact_events       # optional: a lattice blow's end and contact events
 
 Unknown keys are refused, naming the key.
 

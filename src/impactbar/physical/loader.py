@@ -49,7 +49,7 @@ def config_keys(kind: str) -> dict[str, list[str]]:
     >>> config_keys("circuit")["accumulator"]
     ['polytropic_exponent', 'precharge', 'volume']
     >>> config_keys("drifter")["rock"]
-    ['cells_per_piston', 'feed', 'k', 'k_u', 'method']
+    ['cells_per_piston', 'contact_events', 'driven_end', 'feed', 'k', 'k_u', 'method']
     """
     if kind not in _KEYS:
         raise ValueError(f"kind must be one of {', '.join(CONFIG_KINDS)}; got {kind!r}")

@@ -104,6 +104,14 @@ class DrillString:
         no physics). Its orbits converge to the exact blows' at second order (theory §4d).
     method : {"auto", "exact", "lattice"}
         The simulator's blows (:class:`~impactbar.RodRock`'s ``method``): exact by default.
+    driven_end : {"free", "window"}
+        Where a lattice blow under the oil circuit ends (:class:`~impactbar.RodRock`'s
+        ``driven_end``, theory §11): where the piston is free for good (default), or at the law's
+        fixed window.
+    contact_events : {"step", "inside"}
+        Where the lattice's piston-shank separation and re-contact fall
+        (:class:`~impactbar.RodRock`'s ``contact_events``, theory §11): at step ends (default) or
+        inside their steps.
     """
 
     segments: tuple
@@ -113,6 +121,8 @@ class DrillString:
     feed_N: float = 0.0
     cells_per_piston: int | None = None
     method: str = "auto"
+    driven_end: str = "free"
+    contact_events: str = "step"
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -129,6 +139,10 @@ class DrillString:
                                check_int("rock.cells_per_piston", self.cells_per_piston, lo=1, hi=4096))
         if self.method not in ("auto", "exact", "lattice"):
             raise ValueError(f"rock.method must be 'auto', 'exact' or 'lattice'; got {self.method!r}")
+        if self.driven_end not in ("free", "window"):
+            raise ValueError(f"rock.driven_end must be 'free' or 'window'; got {self.driven_end!r}")
+        if self.contact_events not in ("step", "inside"):
+            raise ValueError(f"rock.contact_events must be 'step' or 'inside'; got {self.contact_events!r}")
 
     def law(self, bar, scales) -> RodRock:
         r"""The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
@@ -149,7 +163,8 @@ class DrillString:
         return RodRock(segments=segs, rock=rock,
                        bit_mass=tree.convert("mass", edge, self.bit_mass_kg),
                        feed=tree.convert("force", edge, self.feed_N),
-                       cells_per_piston=self.cells_per_piston, method=self.method)
+                       cells_per_piston=self.cells_per_piston, method=self.method,
+                       driven_end=self.driven_end, contact_events=self.contact_events)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (SI floats)."""
@@ -157,7 +172,8 @@ class DrillString:
                                   "density_kg_m3": g.density_kg_m3} for g in self.segments],
                 "rock_k_N_m": self.rock_k_N_m, "rock_k_u_N_m": self.rock_k_u_N_m,
                 "bit_mass_kg": self.bit_mass_kg, "feed_N": self.feed_N,
-                "cells_per_piston": self.cells_per_piston, "method": self.method}
+                "cells_per_piston": self.cells_per_piston, "method": self.method,
+                "driven_end": self.driven_end, "contact_events": self.contact_events}
 
 
 def rod_from_config(config: dict, *, E: float | None = None, density: float | None = None
@@ -256,7 +272,9 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
     feed = tree.read_si("rock.feed", rock["feed"]) if "feed" in rock else 0.0
     mass = tree.read_si("bit.mass", bit["mass"]) if "mass" in bit else 0.0
     return DrillString(segments=pieces, rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
-                       cells_per_piston=rock.get("cells_per_piston"), method=rock.get("method", "auto"))
+                       cells_per_piston=rock.get("cells_per_piston"), method=rock.get("method", "auto"),
+                       driven_end=rock.get("driven_end", "free"),
+                       contact_events=rock.get("contact_events", "step"))
 
 
 def rock_blows(hammer, trajectory) -> dict:

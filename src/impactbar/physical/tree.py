@@ -241,7 +241,9 @@ _ROCK = (Field("rock.k", "N/m", "'250 kN/mm'", "stiffness", "rock.k", "law", nee
          Field("rock.k_u", "N/m", "'2500 kN/mm'", "stiffness", "rock.k_u", "law", needs="rock"),
          Field("rock.feed", "N", "'5 kN'", "force", "feed", "law", needs="rock"),
          Field("rock.cells_per_piston", "", "64", integer=True),
-         Field("rock.method", "", "'auto'", text=True))
+         Field("rock.method", "", "'auto'", text=True),
+         Field("rock.driven_end", "", "'free'", text=True),
+         Field("rock.contact_events", "", "'step'", text=True))
 _BIT = (Field("bit.mass", "kg", "'1.5 kg'", "mass", "bit_mass", "law", needs="rock"),)
 # each table of the drill string's array [[rod.segments]] (the key rod.segments.<i>.<name>; E and
 # density default to the piston's)
