@@ -255,7 +255,7 @@ def test_the_blows_method_and_grid_in_a_config():
     named = physical.Hammer.from_config(lattice)
     assert (named.model.law.driven_end, named.model.law.contact_events) == ("window", "inside")
     assert named.to_dict()["drill"]["driven_end"] == "window"
-    assert (lat.model.law.driven_end, lat.model.law.contact_events) == ("free", "step")  # (the law's defaults)
+    assert (lat.model.law.driven_end, lat.model.law.contact_events) == ("free", "step")  # (defaults)
     for key, bad in (("driven_end", "fixed"), ("contact_events", "steps")):
         wrong = copy.deepcopy(lattice)
         wrong["rock"][key] = bad
