@@ -23,7 +23,11 @@ missed. Nothing is asserted.
 
 Run: ``python benchmarks/bench_optimize_restarts.py [--workers W] [--sample N] [--local-starts K]
 [--searches S] [--evaluations E] [--search-evaluations E] [--seed S] [--out result.json] [--cache DIR]
-[--only K] [--quick]``; ``--only K`` runs the ``K``-th restarted search alone (1 to ``--searches``;
+[--only K] [--polish N] [--contact-events {step,inside}] [--quick]``; ``--polish N`` the multistart's
+polish's designs (12 by default); ``--contact-events inside`` the example with ``rock.contact_events =
+"inside"`` (the lattice blow's re-contact inside its step: no border of the lattice's along the drilling
+rate's limit), for the multistart and the searches alike; ``--only K`` runs the ``K``-th restarted
+search alone (1 to ``--searches``;
 with ``--cache`` the multistart read from it: a search reproduced without the others); ``--cache DIR``
 makes a run resumable: the multistart's designs in ``DIR/multistart.json``
 (``optimize_drifter(cache=...)``, read first: a killed run's designs are not computed again) and each
@@ -76,7 +80,7 @@ import time
 
 from bench_optimize_drifter import CONSTRAINTS, EXAMPLE, QUICK, VARY
 
-from impactbar.physical import optimize_drifter, read_config
+from impactbar.physical import optimize_drifter, read_config, with_values
 from impactbar.physical.design_keys import design_bounds
 from impactbar.physical.optimize_drifter import OBJECTIVES
 from impactbar.physical.optimize_multistart import found_table, sobol_sample
@@ -213,6 +217,9 @@ def main() -> None:
     p.add_argument("--cache", default=None, help="a folder: the designs and the finished searches stored "
                    "there, read first (a killed run resumes)")
     p.add_argument("--only", type=int, default=None, help="run the K-th restarted search alone")
+    p.add_argument("--polish", type=int, default=12, help="the multistart's polish's most designs")
+    p.add_argument("--contact-events", choices=("step", "inside"), default="step",
+                   help="the example's rock.contact_events (the lattice blow's re-contact)")
     p.add_argument("--quick", action="store_true")
     args = p.parse_args()
     if args.only is not None and not 1 <= args.only <= args.searches:
@@ -226,6 +233,8 @@ def main() -> None:
     from distributed import Client, LocalCluster, as_completed
 
     config, _ = read_config(EXAMPLE)
+    if args.contact_events != "step":  # (the example's own setting is the default's)
+        config = with_values(config, {"rock.contact_events": args.contact_events})
     if args.cache is not None:
         os.makedirs(args.cache, exist_ok=True)
     fkey = OBJECTIVES[OBJECTIVE][0]
@@ -239,9 +248,10 @@ def main() -> None:
                        worker_dashboard_address=None, silence_logs=logging.ERROR) as cluster,
           Client(cluster) as client):
         t0 = time.perf_counter()
-        ms = optimize_drifter(EXAMPLE, vary, objective=OBJECTIVE, constraints=CONSTRAINTS,
+        ms = optimize_drifter(EXAMPLE if args.contact_events == "step" else config, vary, objective=OBJECTIVE,
+                              constraints=CONSTRAINTS,
                               method="multistart", sample=args.sample, local_starts=args.local_starts,
-                              seed=args.seed,
+                              seed=args.seed, polish=args.polish,
                               max_evaluations=args.sample + args.local_starts * args.evaluations,
                               workers=client, progress=False, cache=None if args.cache is None
                               else os.path.join(args.cache, "multistart.json"))
