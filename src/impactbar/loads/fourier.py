@@ -7,6 +7,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .._shared.bounded import remember
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_complex_array, check_int, check_real
 from ..dynamics.compiled_views import FOURIER, LoadKernelView
@@ -20,14 +21,6 @@ __all__ = ["FourierLoad", "CosineLoad"]
 #: ``H_nk p_k`` of :meth:`FourierLoad._transfer` by ``(d, w2, orders, p_k)``, read-only, the last
 #: 64: the same floats for every load with these harmonics, whatever its mean load
 _SHARED_TRANSFERS: dict = {}
-
-
-def _remember(cache: dict, key, value, size: int) -> None:
-    """``cache[key] = value``, the cache emptied first when it holds ``size`` entries (bounded;
-    ``clear()`` is atomic, so threads sharing a cache are safe)."""
-    if len(cache) >= size:
-        cache.clear()
-    cache[key] = value
 
 
 class FourierLoad(Load):
@@ -167,8 +160,8 @@ class FourierLoad(Load):
                 )
             hp = self._pk[None, :] / den
             hp.flags.writeable = False
-            _remember(_SHARED_TRANSFERS, shared, hp, 64)
-        _remember(cache, key, hp, 8)
+            remember(_SHARED_TRANSFERS, shared, hp, 64)
+        remember(cache, key, hp, 8)
         return hp
 
     def periodic_state(self, w2, d, t):

@@ -10,6 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..._shared.bounded import remember
 from . import _bar as K
 
 __all__ = ["FlightData", "flight_data"]
@@ -69,12 +70,11 @@ def flight_data(drive, model, mode, variational=False) -> FlightData:
     store = drive._flights
     data = store.get(key)
     if data is None:
-        if len(store) >= _FLIGHT_DATA_SIZE:
-            store.clear()
         net, code = drive._compiled_network(mode)
-        data = store[key] = FlightData(np.concatenate((drive._par(model, mode, variational), net)), code,
-                                       np.asarray(drive._directions(mode), dtype=np.int32),
-                                       model.end_weights, model.drive_weights)
+        data = FlightData(np.concatenate((drive._par(model, mode, variational), net)), code,
+                          np.asarray(drive._directions(mode), dtype=np.int32), model.end_weights,
+                          model.drive_weights)
+        remember(store, key, data, _FLIGHT_DATA_SIZE)
     return data
 
 

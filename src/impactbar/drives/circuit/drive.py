@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.bounded import remember
 from ..base import Drive, DriveState, GapCrossing, SurfaceEvent
 from . import _bar as K
 from . import _network as NW
@@ -48,6 +49,8 @@ _ACC = "accumulator"
 _REL = "relief"
 #: the events the drive reads itself (the others an extra part's, :func:`.watch.watched`)
 _OWN_EVENTS = (_RAMP, _ACC, _REL)
+#: the most (mode, slots) keys whose fired events a drive keeps (:meth:`HydraulicCircuitDrive._fired`)
+_FIRED_SIZE = 256
 #: the drive's caches computed on use (its ``functools.cached_property`` s), left out of its pickle
 _CACHED = ("_composition", "_stand_in", "_watched", "traits", "abilities", "_event_parts", "_event_slots",
            "_event_flags", "_per_mode", "_flights", "_fired_store")
@@ -353,10 +356,7 @@ class HydraulicCircuitDrive(Drive):
         if out is None:
             names = self._event_slots
             wanted = {names[i] for i in hit if i in names}
-            out = tuple(e for e in self.events(mode) if e.name in wanted)
-            if len(store) >= 256:
-                store.clear()
-            store[key] = out
+            out = remember(store, key, tuple(e for e in self.events(mode) if e.name in wanted), _FIRED_SIZE)
         return out
 
     def _failure(self, model, message, t) -> str:
