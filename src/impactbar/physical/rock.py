@@ -20,6 +20,7 @@ import numpy as np
 
 from .._shared.validate import check_int, check_real
 from ..laws.rodrock import BilinearRock, RodRock, RodSegment
+from ..laws.rodrock.law import CONTACT_EVENTS, DRIVEN_ENDS
 from . import tree
 from .bar import _positive
 from .config import _section
@@ -139,10 +140,10 @@ class DrillString:
                                check_int("rock.cells_per_piston", self.cells_per_piston, lo=1, hi=4096))
         if self.method not in ("auto", "exact", "lattice"):
             raise ValueError(f"rock.method must be 'auto', 'exact' or 'lattice'; got {self.method!r}")
-        if self.driven_end not in (None, "free", "window"):
-            raise ValueError(f"rock.driven_end must be 'free' or 'window'; got {self.driven_end!r}")
-        if self.contact_events not in (None, "step", "inside"):
-            raise ValueError(f"rock.contact_events must be 'step' or 'inside'; got {self.contact_events!r}")
+        for key, allowed in (("driven_end", DRIVEN_ENDS), ("contact_events", CONTACT_EVENTS)):
+            value = getattr(self, key)
+            if value is not None and value not in allowed:
+                raise ValueError(f"rock.{key} must be {' or '.join(map(repr, allowed))}; got {value!r}")
 
     def law(self, bar, scales) -> RodRock:
         r"""The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the

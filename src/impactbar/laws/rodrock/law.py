@@ -155,9 +155,9 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
             raise ValueError(f"rock must be a BilinearRock; got rock={self.rock!r}")
         object.__setattr__(self, "bit_mass", check_real("bit_mass", self.bit_mass, lo=0.0))
         object.__setattr__(self, "feed", check_real("feed", self.feed, lo=0.0))
-        if self.driven_end not in ("window", "free"):
+        if self.driven_end not in DRIVEN_ENDS:
             raise ValueError(f"driven_end must be 'window' or 'free'; got driven_end={self.driven_end!r}")
-        if self.contact_events not in ("step", "inside"):
+        if self.contact_events not in CONTACT_EVENTS:
             raise ValueError("contact_events must be 'step' or 'inside'; "
                              f"got contact_events={self.contact_events!r}")
         if self.blow_time is not None:
@@ -699,6 +699,10 @@ def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field
                                samples_per_piston=samples, record_field=bool(record_field),
                                piston=piston, max_pool_bytes=max_pool_bytes)
 
+
+#: The values of :class:`RodRock`'s ``driven_end`` and ``contact_events`` (a config's ``[rock]`` keys too)
+DRIVEN_ENDS = ("free", "window")
+CONTACT_EVENTS = ("step", "inside")
 
 #: The cells a piston of the lattice whose orbit starts the exact blows' coarse orbit
 #: (:meth:`RodRock.coarse_start`; the example's default grid, its orbit within 1.4e-3 of the exact one)
