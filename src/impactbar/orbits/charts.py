@@ -106,12 +106,9 @@ def find_sign_changes(h: Callable[[float], float], lo: float, hi: float, *, n_sc
     scanned.update(zip(xs.tolist(), hs.tolist(), strict=True))
     out = []
     for a, b, ha, hb in zip(xs[:-1], xs[1:], hs[:-1], hs[1:], strict=True):
-        if not (np.isfinite(ha) and np.isfinite(hb)):
-            continue
-        if ha == 0.0:
-            out.append(float(a))
-        elif ha * hb < 0.0:
-            out.append(brentq(f, a, b, xtol=xtol, rtol=8.9e-16))
+        root = _bracket_root(f, a, b, ha, hb, xtol)
+        if root is not None:
+            out.append(root)
     if np.isfinite(hs[-1]) and hs[-1] == 0.0:
         out.append(float(xs[-1]))
     return out
@@ -125,13 +122,24 @@ def _last_sign_change(h, f, xs, scanned: dict, xtol: float) -> list[float]:
         return [float(xs[-1])]
     for i in range(xs.size - 2, -1, -1):
         ha = scanned[float(xs[i])] = float(h(xs[i]))
-        if math.isfinite(ha) and math.isfinite(hb):
-            if ha == 0.0:
-                return [float(xs[i])]
-            if ha * hb < 0.0:
-                return [brentq(f, xs[i], xs[i + 1], xtol=xtol, rtol=8.9e-16)]
+        root = _bracket_root(f, xs[i], xs[i + 1], ha, hb, xtol)
+        if root is not None:
+            return [root]
         hb = ha
     return []
+
+
+def _bracket_root(f, a, b, ha: float, hb: float, xtol: float) -> float | None:
+    """The root :func:`find_sign_changes` takes from the scan's bracket ``[a, b]`` (``ha``, ``hb``
+    the values there): ``a`` where ``ha`` is 0, Brent's root where the signs differ, else ``None``
+    (and where either value is not finite: NaN breaks a bracket)."""
+    if not (math.isfinite(ha) and math.isfinite(hb)):
+        return None
+    if ha == 0.0:
+        return float(a)
+    if ha * hb < 0.0:
+        return brentq(f, a, b, xtol=xtol, rtol=8.9e-16)
+    return None
 
 
 def max_phase_residual(model: BarModel, load: Load) -> float:
