@@ -27,9 +27,8 @@ from ..drives.orbitproblem import at_rounding_floor, step_size
 
 __all__ = ["SETTLE_HANDOVER", "SETTLE_LIFTED", "SETTLE_RTOL", "CLOSING_HANDOVER", "LIFTED_HANDOVER",
            "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "ROOT_HANDOVER", "LOOSE_FIRST",
-           "ROOT_SETTLE_RTOL", "close", "checked_root", "root_settings", "settle_handover", "loose_settings",
-           "settle_settings",
-           "first_residual"]
+           "ROOT_SETTLE_RTOL", "STEER_PHI_ATOL", "close", "checked_root", "root_settings", "settle_handover",
+           "loose_settings", "settle_settings", "steer_settings", "first_residual"]
 
 #: How closely the impact velocities of the motion followed to a start agree, impact after impact,
 #: before Newton's method takes over (a drive whose flights integrate the variational equations).
@@ -89,6 +88,16 @@ LOOSE_FIRST = 1e-6
 #: 27,778 CVODE steps saved and the orbit as near one at ``rtol = 1e-12`` (1.4e-10 of the unknowns,
 #: 1.3e-10 before; ``benchmarks/HISTORY.md``).
 ROOT_SETTLE_RTOL = 1e-5
+#: CVODE's absolute tolerance on the fundamental matrix of the chord's steering flight where the
+#: chord's plain flights are the orbit's root's (:func:`steer_settings`), in place of the state's
+#: (``1e-9`` at :data:`SETTLE_RTOL`): that matrix only steers the chord, whose root is the plain
+#: flights', so its rows (the small volumes' pressures, some 90 % of the variational steps' limits)
+#: need not hold CVODE's error test; the state and the energies, whose residual the chord's first step
+#: takes (:func:`first_residual`), keep theirs. On the spool drill (``examples/circuit_drill_spool.toml``)
+#: the steering period's 2,625 CVODE steps fall to 1,705 (1e-7: 2,011; 1e-6: 1,861; 1e-4: 1,668), the
+#: chord's steps as many (one plain period at the root's tolerance) and its orbit as near one at
+#: ``rtol = 1e-12`` (1.4e-10 of the unknowns; ``benchmarks/HISTORY.md``).
+STEER_PHI_ATOL = 1e-5
 
 _UNSET = object()
 
@@ -174,6 +183,28 @@ def settle_settings(problem, loose):
     if loose is None or root_settings(problem) is None or loose.rtol >= ROOT_SETTLE_RTOL:
         return loose
     return dataclasses.replace(loose, rtol=ROOT_SETTLE_RTOL, atol=ROOT_SETTLE_RTOL * loose.atol / loose.rtol)
+
+
+def steer_settings(problem, loose):
+    """The integrator of the chord's steering flight of ``problem`` (``loose`` its flights at
+    :data:`SETTLE_RTOL`): its fundamental matrix at :data:`STEER_PHI_ATOL` where the chord's plain
+    flights are the orbit's root's (:func:`root_settings`) and ``loose`` takes a tolerance of its own
+    for it (a ``phi_atol``: the oil circuit's, :class:`~impactbar.drives.circuit.CircuitFlightSettings`),
+    else ``loose`` itself.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    loose : FlightSettings
+        The flights at the loose tolerance (:func:`loose_settings`).
+
+    Returns
+    -------
+    FlightSettings
+    """
+    if root_settings(problem) is None or not hasattr(loose, "phi_atol"):
+        return loose
+    return dataclasses.replace(loose, phi_atol=STEER_PHI_ATOL)
 
 
 def first_residual(problem, X, steer, r):

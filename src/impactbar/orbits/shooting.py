@@ -525,7 +525,7 @@ class ShootingProblem(OrbitProblem):
         ``SETTLE_RTOL`` (its residual the chord's first where :func:`._closing.first_residual` lets
         it), the plain flights' root (with ``handover``, the iterate after a Newton step of at most that
         size) and the last Jacobian."""
-        steer = self._steer(C.loose_settings(self.settings))
+        steer = self._steer(C.steer_settings(self, C.loose_settings(self.settings)))
         r, first = self.residual(X, settings=steer, steer=True)
         r = C.first_residual(self, X, steer, r)  # (the chord's first residual, where it may be this)
         return self._chord(X, first, tol, max_iter, r, handover, first_here=True)

@@ -32,8 +32,8 @@ from . import _sundials as S
 if not S.bind():  # pragma: no cover - imported only where available (flight.py)
     raise ImportError(f"CVODE cannot be driven from compiled code here: {S.reason()}")
 
-__all__ = ["fly", "workspace", "last_workspace", "Workspace", "CV_ROOT_RETURN", "CV_TSTOP_RETURN",
-           "CV_TOO_MUCH_WORK"]
+__all__ = ["fly", "fly_split", "workspace", "last_workspace", "Workspace", "CV_ROOT_RETURN",
+           "CV_TSTOP_RETURN", "CV_TOO_MUCH_WORK"]
 
 CV_ADAMS, CV_BDF, CV_ONE_STEP = 1, 2, 2
 CV_SUCCESS, CV_TSTOP_RETURN, CV_ROOT_RETURN, CV_TOO_MUCH_WORK = 0, 1, 2, -1
@@ -56,6 +56,7 @@ _band_mu = _ext("SUNBandMatrix_UpperBandwidth", types.int64(_p))
 _band_cols = _ext("SUNBandMatrix_Columns", types.int64(_p))
 _reinit = _ext("CVodeReInit", _c(_p, _d, _p))
 _tolerances = _ext("CVodeSStolerances", _c(_p, _d, _d))
+_vector_tolerances = _ext("CVodeSVtolerances", _c(_p, _d, _p))
 _user_data = _ext("CVodeSetUserData", _c(_p, _p))
 _root_direction = _ext("CVodeSetRootDirection", _c(_p, _p))
 _stop_time = _ext("CVodeSetStopTime", _c(_p, _d))
@@ -228,13 +229,39 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     roots : numpy.ndarray of int32, shape (E,)
         CVODE's root information at a root (nonzero where an event function crossed), else 0.
     """
-    N = y0.size
-    y = nb.carray(_nv_data(yvec), N)
+    y = nb.carray(_nv_data(yvec), y0.size)
     y[:] = y0
-    roots = np.zeros(directions.size, np.int32)
     flag = _reinit(mem, t0, yvec)
     if flag == 0:
         flag = _tolerances(mem, rtol, atol)
+    return _steps(mem, yvec, flag, t0, y0, t_end, directions, par, keep, max_steps)
+
+
+@nb.njit(cache=CACHE, nogil=True)
+def fly_split(mem, yvec, t0, y0, t_end, rtol, atol, split, atol_after, atol_vec, directions, par, keep,
+              max_steps):
+    """:func:`fly` with CVODE's absolute tolerance ``atol`` on the components before ``split`` and
+    ``atol_after`` from it (``CVodeSVtolerances``; a variational flight's fundamental matrix from
+    ``split``), written into ``atol_vec`` (the workspace's :attr:`Workspace.atol`, of ``y0.size``):
+    arguments and returns otherwise :func:`fly`'s."""
+    N = y0.size
+    y = nb.carray(_nv_data(yvec), N)
+    y[:] = y0
+    weights = nb.carray(_nv_data(atol_vec), N)
+    weights[:split] = atol
+    weights[split:] = atol_after
+    flag = _reinit(mem, t0, yvec)
+    if flag == 0:
+        flag = _vector_tolerances(mem, rtol, atol_vec)
+    return _steps(mem, yvec, flag, t0, y0, t_end, directions, par, keep, max_steps)
+
+
+@nb.njit(inline="always")
+def _steps(mem, yvec, flag, t0, y0, t_end, directions, par, keep, max_steps):
+    """:func:`fly`'s loop after CVODE's re-initialisation and tolerances (``flag`` theirs)."""
+    N = y0.size
+    y = nb.carray(_nv_data(yvec), N)
+    roots = np.zeros(directions.size, np.int32)
     if flag == 0:
         flag = _user_data(mem, par.ctypes.data)
     if flag == 0:
@@ -297,12 +324,14 @@ def _swap_ops(LS, ctx) -> bool:
     return False
 
 
-def _free(ctx, mem, y, A, LS):
+def _free(ctx, mem, y, A, LS, atol):
     f = S.function
     f("CVodeFree")(ctypes.byref(ctypes.c_void_p(mem)))
     f("SUNLinSolFree")(LS)
     f("SUNMatDestroy")(A)
-    f("N_VDestroy")(y)
+    for vector in (y, atol):
+        if vector:
+            f("N_VDestroy")(vector)
     f("SUNContext_Free")(ctypes.byref(ctypes.c_void_p(ctx)))
 
 
@@ -330,6 +359,8 @@ class Workspace:
     ----------
     mem, y : int
         The addresses :func:`fly` takes.
+    atol : int
+        The address of a vector of ``N`` that :func:`fly_split` takes (its absolute tolerances).
     """
 
     def __init__(self, N: int, band: int, callbacks, blocks: bool = False, adams: bool = False,
@@ -340,6 +371,7 @@ class Workspace:
             raise MemoryError("SUNContext_Create failed")
         f("SUNContext_ClearErrHandlers")(ctx)
         y = f("N_VNew_Serial")(N, ctx)
+        atol = f("N_VNew_Serial")(N, ctx)
         upper = band + 1 if plain and band else band
         if band:
             A = f("SUNBandMatrix")(N, upper, band, ctx)
@@ -349,9 +381,10 @@ class Workspace:
             LS = f("SUNLinSol_Dense")(y, A, ctx) if y and A else None
         mem = f("CVodeCreate")(CV_ADAMS if adams else CV_BDF, ctx)
         self.ctx, self.mem, self.y, self.N, self.band, self.adams = ctx.value, mem, y, N, band, bool(adams)
+        self.atol = atol
         self.plain = bool(plain and band)
-        self._finalizer = weakref.finalize(self, _free, ctx.value, mem, y, A, LS)
-        if not (y and A and LS and mem):
+        self._finalizer = weakref.finalize(self, _free, ctx.value, mem, y, A, LS, atol)
+        if not (y and atol and A and LS and mem):
             raise MemoryError("SUNDIALS could not allocate a CVODE workspace")
         if band:  # the storage the Jacobian writes (SUNBandMatrix: smu = mu + ml, or min(N - 1, mu + ml))
             smu = f("SUNBandMatrix_StoredUpperBandwidth")(A) & _LOW32

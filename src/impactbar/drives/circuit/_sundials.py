@@ -67,6 +67,7 @@ FUNCTIONS = {
     "CVodeInit": ("sundials_cvode", _int, (_vp, _vp, _dbl, _vp)),
     "CVodeReInit": ("sundials_cvode", _int, (_vp, _dbl, _vp)),
     "CVodeSStolerances": ("sundials_cvode", _int, (_vp, _dbl, _dbl)),
+    "CVodeSVtolerances": ("sundials_cvode", _int, (_vp, _dbl, _vp)),
     "CVodeSetLinearSolver": ("sundials_cvode", _int, (_vp, _vp, _vp)),
     "CVodeSetJacFn": ("sundials_cvode", _int, (_vp, _vp)),
     "CVodeRootInit": ("sundials_cvode", _int, (_vp, _int, _vp)),

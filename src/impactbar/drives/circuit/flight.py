@@ -408,7 +408,9 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     flights' too (the state's block, the energies' identity: the dense solver's steps to the bit), else
     the plain flights' by the dense solver; ``adams``: Adams-Moulton's
     method, else BDF; ``n_energy`` the energy integrands after the ``n`` states; ``code``: the
-    flight's kernels, whose C callbacks CVODE calls: the generated module, :mod:`._netgen`)."""
+    flight's kernels, whose C callbacks CVODE calls: the generated module, :mod:`._netgen`); a
+    variational flight's fundamental matrix (after the ``keep`` leading components) at
+    ``settings.phi_atol`` where it is given (:func:`._cvode.fly_split`)."""
     n = keep - n_energy
     var = band and y0.size > keep  # variational: the band solver
     by_blocks = var or (band and blocks and n_energy > 0)  # (a plain flight's blocks: the energies' rows)
@@ -416,9 +418,14 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
     callbacks = (rhs, jac_band if by_blocks else jac, events, n_events)
     ws = cv.workspace(y0.size, n - 1 if by_blocks else 0, callbacks, blocks and by_blocks, adams,
                       not var)
-    flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
-                                      float(settings.atol), np.asarray(directions, dtype=np.int32), par,
-                                      keep, _MAX_STEPS)
+    directions = np.asarray(directions, dtype=np.int32)
+    if var and settings.phi_atol is not None:  # (the fundamental matrix's own absolute tolerance)
+        flag, ts, Y, yend, roots = cv.fly_split(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
+                                                float(settings.atol), keep, float(settings.phi_atol),
+                                                ws.atol, directions, par, keep, _MAX_STEPS)
+    else:
+        flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
+                                          float(settings.atol), directions, par, keep, _MAX_STEPS)
     return int(flag), None, ts, Y, yend, [i for i, r in enumerate(roots.tolist()) if r]
 
 

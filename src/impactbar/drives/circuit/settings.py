@@ -91,11 +91,19 @@ class CircuitFlightSettings(FlightSettings):
         circuit with a part of mechanical state (a spool valve's, whose stops, ports and pilot ports
         end some 20 flights a period), ``False`` elsewhere (their numbers kept as they were; theory
         §11, *The integrator*).
+    phi_atol : float or None, optional
+        CVODE's absolute tolerance on the entries of a variational flight's fundamental matrix
+        (keyword, positive and finite; in the units of theory §11, where ``Phi`` is of order 1):
+        ``None`` (default), ``atol``, as on the state. A coarser one lets the state alone hold the
+        error test where the matrix only steers Newton's method (the spool drill's steering flights:
+        :data:`~impactbar.orbits._closing.STEER_PHI_ATOL`). Only CVODE's variational flights driven from
+        compiled code (``compiled``) read it.
 
     Raises
     ------
     ValueError
-        A method other than ``"CVODE"``, a tolerance not positive and finite, a flag that is not
+        A method other than ``"CVODE"``, a tolerance not positive and finite (``phi_atol`` may be
+        ``None``), a flag that is not
         ``True`` or ``False``, an unknown ``sensitivity``, ``multistep`` or ``carry`` (each named, with
         the allowed values).
 
@@ -116,14 +124,17 @@ class CircuitFlightSettings(FlightSettings):
     sensitivity: str = dataclasses.field(default="auto", kw_only=True)
     multistep: str = dataclasses.field(default="auto", kw_only=True)
     carry: str | bool = dataclasses.field(default="auto", kw_only=True)
+    phi_atol: float | None = dataclasses.field(default=None, kw_only=True)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.method != "CVODE":
             raise ValueError(f"method must be 'CVODE' (the circuit's flights; their multistep method: "
                              f"multistep); got {self.method!r}")
-        for name in ("rtol", "atol"):
+        for name in ("rtol", "atol", "phi_atol"):
             value = getattr(self, name)
+            if name == "phi_atol" and value is None:
+                continue
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name} must be positive and finite; got {value!r}")
