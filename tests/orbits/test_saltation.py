@@ -1,7 +1,8 @@
 """The saltation through a flight's end (``_saltation.through``) and the drive's maps' Jacobian
 (``map_jacobian``): the central differences in a state moved one component at a time, the same bits
 as the same differences taken on fresh copies with numpy's scalars (a reference written here), and an
-affine map's matrix to the differences' rounding."""
+affine map's matrix to the differences' rounding; a map that keeps or sets each component
+(``kept_or_set_jacobian``) exactly, from two calls, the spool drill's maps among them."""
 
 import numpy as np
 import pytest
@@ -10,8 +11,9 @@ from impactbar.drives import DriveState
 from impactbar.drives.circuit import CircuitFlightSettings, _sundials
 from impactbar.drives.circuit import flight as F
 from impactbar.drives.flight import EVENT, vector_field
-from impactbar.orbits._saltation import map_jacobian, through
-from impactbar.physical import circuit_preset
+from impactbar.orbits import _saltation
+from impactbar.orbits._saltation import kept_or_set_jacobian, map_jacobian, through
+from impactbar.physical import circuit_preset, load
 
 
 def _differences(fn, z):
@@ -73,3 +75,60 @@ def test_through_an_event_is_the_fresh_copies_differences():
     G = np.eye(n)
     G[2 * M:, 2 * M:] = _differences(z_after, fl.z)
     assert np.array_equal(got, G @ Dt)
+
+
+def _keep_or_set(zz):
+    out = np.array(zz, dtype=float)
+    out[1], out[3] = 0.0, 1.0  # (a stop's velocity and position, as a spool's at its stop)
+    return out
+
+
+def test_a_map_that_keeps_or_sets_is_exact_from_two_calls():
+    """The identity's rows and zeros exactly, where the central differences' diagonal is 1 only to
+    their rounding (at ``z = 0.3``: some 1e-9 off)."""
+    z = np.array([0.3, -2.5e3, 1e-9, 0.97, -0.0, 7.0])
+    calls = []
+
+    def fn(zz):
+        calls.append(1)
+        return _keep_or_set(zz)
+
+    J = kept_or_set_jacobian(fn, z)
+    assert len(calls) == 2
+    assert np.array_equal(J, np.diag([1.0, 0.0, 1.0, 0.0, 1.0, 1.0]))
+    central = map_jacobian(_keep_or_set, z)
+    assert np.max(np.abs(central - J)) < 1e-8 and not np.array_equal(central, J)
+
+
+def test_another_map_takes_the_central_differences():
+    rng = np.random.default_rng(5)
+    B, c = rng.standard_normal((4, 4)), rng.standard_normal(4)
+    z = np.array([0.3, -1.5, 2.0, 1e-3])
+    assert np.array_equal(kept_or_set_jacobian(lambda zz: B @ zz + c, z),
+                          map_jacobian(lambda zz: B @ zz + c, z))
+    swap = kept_or_set_jacobian(lambda zz: np.asarray(zz)[::-1].copy(), z)  # (kept by none: moved)
+    assert np.array_equal(swap, map_jacobian(lambda zz: np.asarray(zz)[::-1].copy(), z))
+
+
+@pytest.mark.skipif(not _sundials.available(), reason="CVODE not bound here")
+def test_the_spool_drills_maps_keep_or_set(monkeypatch):
+    """Every map at the events of the spool drill's orbit (its variational periods' 58 saltations)
+    keeps or sets each component: no central differences taken, each exact Jacobian within 1e-8 of
+    them."""
+    from pathlib import Path
+
+    from impactbar import find_orbit
+
+    d = load(Path(__file__).resolve().parents[2] / "examples" / "circuit_drill_spool.toml")
+    seen, central = [], []
+    exact = _saltation.kept_or_set_jacobian
+
+    def recorded(fn, z):
+        J = exact(fn, z)
+        seen.append(np.max(np.abs(J - map_jacobian(fn, z))))
+        return J
+
+    monkeypatch.setattr(_saltation, "kept_or_set_jacobian", recorded)
+    monkeypatch.setattr(_saltation, "map_jacobian", lambda fn, z: central.append(1) or map_jacobian(fn, z))
+    find_orbit(d.model(), d.drive())
+    assert len(seen) >= 29 and not central and max(seen) < 1e-8

@@ -10,10 +10,10 @@ import numpy as np
 from ..drives.base import DriveState
 from ..drives.flight import vector_field
 
-__all__ = ["through", "map_jacobian"]
+__all__ = ["through", "map_jacobian", "kept_or_set_jacobian"]
 
 
-def through(model, drive, k: int, mode, fl, fired, D):
+def through(model, drive, k: int, mode, fl, fired, D, exact_maps: bool = False):
     """The Jacobian through the end of a flight: the flight's fundamental matrix ``Phi``
     (``fl.sensitivity``), the event's time moved by the perturbation,
     ``Phi - f^- (grad h . Phi) / (grad h . f^-)`` (``h`` the arrival ``c . q`` or the fired event's
@@ -36,6 +36,9 @@ def through(model, drive, k: int, mode, fl, fired, D):
     D : numpy.ndarray, shape (n, n), or None
         The Jacobian so far, ``n = 2 (N + 1) + k``; ``None`` where the flight's ``sensitivity``
         already carries it (its variational equations started from it, ``OwnFlight.carried``).
+    exact_maps : bool, optional
+        The map's Jacobian by :func:`kept_or_set_jacobian` (exact where the map keeps or sets each
+        component, two calls of it), else by :func:`map_jacobian`'s central differences (``2 k``).
 
     Returns
     -------
@@ -71,7 +74,7 @@ def through(model, drive, k: int, mode, fl, fired, D):
             return st.z
 
         G = np.eye(n)
-        G[2 * M:, 2 * M:] = map_jacobian(z_after, fl.z)
+        G[2 * M:, 2 * M:] = (kept_or_set_jacobian if exact_maps else map_jacobian)(z_after, fl.z)
         Dt = G @ Dt
     return Dt if D is None else Dt @ D
 
@@ -99,3 +102,33 @@ def map_jacobian(fn, z):
         zm[j] = zj - step
         out[:, j] = (np.asarray(fn(zp), dtype=float) - np.asarray(fn(zm), dtype=float)) / (2.0 * step)
     return out
+
+
+def kept_or_set_jacobian(fn, z):
+    """The Jacobian of a drive's map ``z -> fn(z)`` that keeps each component or sets it to a value of
+    its own (the oil circuit's: a flag's event keeps the state, a spool's stop sets its position and
+    velocity, a held supply its pressure), exact: the identity's rows where ``fn`` keeps the
+    component, zero where it sets it, told apart by ``fn`` at ``z`` and at ``z`` moved by
+    :func:`map_jacobian`'s steps (a kept component returned as given, a set one the same at both);
+    :func:`map_jacobian`'s central differences (``2 k`` calls, each entry within some ``1e-9`` of
+    the exact one by their rounding) where a component is neither.
+
+    Parameters
+    ----------
+    fn : callable
+        The drive's map, an array of shape ``(k,)`` to another.
+    z : array_like, shape (k,)
+        Where its Jacobian is taken.
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, k)
+        ``d fn / d z`` there.
+    """
+    z = np.asarray(z, dtype=float)
+    moved = z + 1e-7 * np.maximum(1.0, np.abs(z))
+    at, there = np.asarray(fn(z.copy()), dtype=float), np.asarray(fn(moved.copy()), dtype=float)
+    kept = (at == z) & (there == moved)
+    if not np.all(kept | (there == at)):
+        return map_jacobian(fn, z)
+    return np.diag(kept.astype(float))

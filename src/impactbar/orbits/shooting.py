@@ -232,6 +232,7 @@ class ShootingProblem(OrbitProblem):
                 D[0, :M] -= c
         carries = self._carries  # (the flights started from D: their sensitivity the Jacobian so far)
         carry = bool(variational) and carries is not None and carries(model, settings or self.settings)
+        exact = bool(variational) and C.root_settings(self) is not None  # (the maps' exact Jacobians)
         while True:
             fl = fly(model, drive, state, t, q, v, end, settings or self.settings, bool(variational),
                      start=D if carry else None)
@@ -242,7 +243,7 @@ class ShootingProblem(OrbitProblem):
             state = DriveState(state.mode, fl.z)
             if fl.end == ARRIVAL:
                 if variational:
-                    D = through(model, drive, self.k, before, fl, None, None if carry else D)
+                    D = through(model, drive, self.k, before, fl, None, None if carry else D, exact)
                 break
             if fl.end != EVENT:
                 raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
@@ -252,7 +253,7 @@ class ShootingProblem(OrbitProblem):
                 if keep:
                     events.append((t, e, state.mode, e.crossing_speed(q, v)))
             if variational:
-                D = through(model, drive, self.k, before, fl, fl.events, None if carry else D)
+                D = through(model, drive, self.k, before, fl, fl.events, None if carry else D, exact)
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if self.coupled:  # the blow and the drive's state together, the drive's map at its end
