@@ -129,3 +129,37 @@ def test_the_thinned_direction_gives_the_unthinned_ones_tangent(blow, monkeypatc
     assert off(G) <= 1e-8
     assert off(tangent(2.0)) <= 1e-8
     assert off(tangent(2.0, np.inf)) > 1e-6
+
+
+def test_the_tangent_takes_the_blows_own_switch_log(blow, monkeypatch):
+    """The blow's last iterate logs its switches from the impact on (each iterate goes on from its
+    predecessor's snapshot, whose log it carries): the tangent solves no blow, and it is the tangent
+    of the primal blow solved again for its own log, to the bit. A log that overflowed is not kept
+    (the primal then solved again, once)."""
+    from impactbar.laws.rodrock._records import RD_FULL, RD_HEAD, RD_ROWS, WS_RD
+    from impactbar.laws.rodrock.exactmap import ExactBlowMap
+
+    arrival, (_, res, after), G = blow
+    model, drive, state = arrival[:3]
+    rec = res.record
+    solves = []
+    real = ExactBlowMap.solve
+
+    def counted(self, *args, **kwargs):
+        solves.append(kwargs.get("log", 0))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(ExactBlowMap, "solve", counted)
+    np.testing.assert_array_equal(coupled_blow_tangent(model, drive, res, after, state), G)
+    assert solves == []
+    (ws, scale), _ = rec.switch_log
+    assert int(ws[WS_RD][RD_HEAD, RD_ROWS].real) > 0  # (the separations and re-contacts: measured 10)
+    monkeypatch.setattr(rec, "switch_log", None)
+    np.testing.assert_array_equal(coupled_blow_tangent(model, drive, res, after, state), G)
+    assert len(solves) == 1 and solves[0] > 0  # (the primal again, with its log)
+    from impactbar.laws.rodrock.exactjac import kept_primal
+
+    full = (*ws[:WS_RD], ws[WS_RD].copy(), *ws[WS_RD + 1:])
+    full[WS_RD][RD_HEAD, RD_FULL] = 1.0
+    assert kept_primal(ws, scale, rec.duration) is not None
+    assert kept_primal(full, scale, rec.duration) is None

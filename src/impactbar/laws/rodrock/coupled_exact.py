@@ -343,6 +343,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     True
     """
     from ...loads import FourierLoad
+    from .exactjac import LOG_ROWS, kept_primal
     from .exactmap import ExactBlowMap, ExactRockContact, initial_waves
 
     q = np.array(q, dtype=float)
@@ -370,7 +371,10 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
             # up to where this force is held; the next blow goes on from the last it shares)
             keep = {"resume": keep.get("snapshots"), "stops": T0 * np.arange(1, math.floor(reach / T0) + 2)}
         ex, finish = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap,
-                                certified=True, defer=True, keep=keep if march else None)
+                                certified=True, defer=True, keep=keep if march else None,
+                                log=LOG_ROWS if march else 0)  # (each iterate's: the last one's
+        # is its tangent's schedule, coupled_tangent; a log that overflows is dropped, the tangent then
+        # solving the blow again for its own)
         # (the last one's energies and copies: finish)
         if ex.ended_by in ENDS:  # certified over at ex.duration with this force
             D = float(ex.duration)
@@ -404,8 +408,10 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     else:
         ex = finish()
     bmap.duration = float(ex.duration)
-    q_after, v_after = bmap.state_after(ex)
+    q_after, v_after, on_stop = bmap.state_after(ex, on_stop=True)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
+    # (marching: the last iterate's switch log, logged from the impact on, the tangent's schedule)
+    rec.switch_log = None if not march else (kept_primal(*keep["workspace"], float(ex.duration)), on_stop)
     rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
     rec.coupling = Coupling(breaks, [a.spline for a in incoming], Z0)  # (the blow's tangent: coupled_tangent)
     work = float(sum(p.piston_work() for p in fl.pieces))

@@ -19,6 +19,10 @@ tangent is the fixed point of their tangents, iterated as the force is:
   where the thinned cubic misses the derivative at a step it passes over by :data:`THIN_TOL`): the
   tangent runs' cost is in their drive's pieces.
 
+The tangent runs' schedule is the primal blow's switch log, the one its last iterate logged (each
+iterate logs from the impact on, going on from its predecessor's snapshot with the log so far:
+:func:`~impactbar.laws.rodrock.exactjac.kept_primal`), so that the blow is not solved again; where
+no log was kept (the plain iteration, a log that overflowed) the primal is solved again for its own.
 By causality the ``k``-th round is right over ``[0, 2 k T_0]``; the rounds end when the derivatives
 after the blow change by less than :data:`TANGENT_TOL` of their size. The drive's map at the blow's
 end (its :meth:`~impactbar.Drive.impact`, which writes values or keeps them) is taken by central
@@ -86,11 +90,13 @@ def coupled_blow_tangent(model, drive, res, after, state, settings=None):
         return None
     bmap = rec._map
     q, v = np.asarray(rec.q_before, dtype=float), np.asarray(rec.v_before, dtype=float)
-    primal = EJ._primal(bmap, q, v)
-    if primal is None:
-        return None
+    primal, on_stop = getattr(rec, "switch_log", None) or (None, None)
+    if primal is None:  # (no log kept: the primal solved again for its own)
+        primal = EJ._primal(bmap, q, v)
+        if primal is None:
+            return None
+        _, _, on_stop = EJ._plus(bmap, *primal)
     ws, scale = primal
-    _, _, on_stop = EJ._plus(bmap, ws, scale)
     t0 = float(bmap.t0)
     et = make(res.pieces, res.events, state.mode, coupling.breaks, coupling.splines, coupling.impedance, t0)
     basis = bmap.basis

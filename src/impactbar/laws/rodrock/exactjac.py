@@ -52,6 +52,7 @@ from ._records import (  # the records' slots and the pool's columns
     PR_NODW,
     PR_P0,
     PR_RECORD,
+    PR_TMAX,
     PR_WINDOW,
     PR_ZBIT,
     RD_FULL,
@@ -73,7 +74,7 @@ from ._records import (  # the records' slots and the pool's columns
     WS_SZ,
 )
 
-__all__ = ["exact_impact_map", "tangents"]
+__all__ = ["exact_impact_map", "kept_primal", "tangents"]
 
 #: rows of the primal's switch log first asked for (doubled while it overflows)
 LOG_ROWS = 64
@@ -97,6 +98,21 @@ def _primal(bmap, q, v):
     if CI[CI_GIVEUP] != 0:
         return None
     return ws, scale
+
+
+def kept_primal(ws, scale, duration):
+    """A primal blow's switch log kept from a run that logged its switches (the coupled blow's last
+    iterate, its run certified over at ``duration``: :mod:`~impactbar.laws.rodrock.coupled_exact`), for
+    :func:`tangents` without solving the blow again: ``(ws, scale)``, ``ws`` the run's arrays but its
+    pool's (``None``: the next blow's), copied, its horizon ``duration``; or None where the run logged
+    nothing, its log overflowed or a switch search was given up (the primal then solved again, by
+    :func:`_primal`)."""
+    RD, CI = ws[WS_RD], ws[WS_CI]
+    if RD.shape[0] <= 1 or RD[RD_HEAD, RD_FULL].real != 0.0 or CI[CI_GIVEUP] != 0:
+        return None
+    light = (None, None, None, None, *(x.copy() for x in ws[4:]))
+    light[WS_PR][PR_TMAX] = duration  # (the tangent runs' horizon: the blow's end)
+    return light, scale
 
 
 def _plus(bmap, ws, scale):
