@@ -163,3 +163,34 @@ def test_the_tangent_takes_the_blows_own_switch_log(blow, monkeypatch):
     full[WS_RD][RD_HEAD, RD_FULL] = 1.0
     assert kept_primal(ws, scale, rec.duration) is not None
     assert kept_primal(full, scale, rec.duration) is None
+
+
+def test_the_rounds_end_where_what_is_left_is_estimated_below_the_tolerance(blow, monkeypatch):
+    """The rounds end where the change left to the fixed point, estimated from the last two rounds'
+    contraction, is below ``TANGENT_TOL``: 4 rounds on this blow (changes 1.7e-2, 8.8e-5, 6.6e-8 of
+    its size, 4.9e-11 left estimated), where the plain rule (the last change below it) takes 5; the
+    tangent then moves by 2.4e-11 of its size (measured), within the estimate."""
+    import impactbar.laws.rodrock.coupled_tangent as CT
+    from impactbar.laws.rodrock import exactjac as EJ
+
+    arrival, (_, res, after), G = blow
+    model, drive, state = arrival[:3]
+    runs = []
+    real = EJ.tangents
+
+    def counted(*args, **kwargs):
+        runs.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(EJ, "tangents", counted)
+    np.testing.assert_array_equal(coupled_blow_tangent(model, drive, res, after, state), G)
+    assert len(runs) == 4
+    runs.clear()
+    settled = CT._settled
+    monkeypatch.setattr(CT, "_settled", lambda change, last: change <= CT.TANGENT_TOL)
+    plain = coupled_blow_tangent(model, drive, res, after, state)
+    assert len(runs) == 5
+    moved = np.max(np.abs(plain - G)) / np.max(np.abs(plain))
+    assert 0.0 < moved <= 1e-10, moved
+    assert not settled(8.8e-5, 1.7e-2) and settled(6.6e-8, 8.8e-5) and settled(1e-11, 1e-3)
+    assert not settled(2e-10, np.inf) and not settled(2e-10, 1e-10)  # (no estimate, no contraction)
