@@ -232,11 +232,13 @@ class _Incoming:
             cur[idx[~first]] -= 2.0 * T0
         return out
 
-    def callables(self, breaks):
+    def callables(self, breaks, memo=None):
         """``a`` on each interval of ``breaks`` (model times, where ``a`` may jump) as a callable of
         the model time: a cubic spline through its exact values ``T_0 / SAMPLES`` apart (its error
         ``O(h^4)`` where ``a`` is smooth, ``O(h)`` over a step at a kink: ``O(h^2)`` in what the
-        drive integrates)."""
+        drive integrates). ``memo`` (a dict, the blow's iterates'): an interval's callable kept by
+        its ends and taken again where its values are the same to the bit (the march's iterates: an
+        iterate's early waves are its predecessor's)."""
         from scipy.interpolate import CubicSpline
 
         xs, xvs = [], []
@@ -253,7 +255,15 @@ class _Incoming:
         # (the wave at all the samples at once: each value the one it has alone)
         values = np.split(-2.0 * self.arriving(np.concatenate(xvs)) / self.Z0,
                           np.cumsum([x.size for x in xs])[:-1])
-        return [_spline_callable(CubicSpline(x, y), self.t0) for x, y in zip(xs, values, strict=True)]
+        memo = {} if memo is None else memo
+        out = []
+        for key, x, y in zip(zip(breaks[:-1], breaks[1:], strict=True), xs, values, strict=True):
+            seen, a = memo.get(key, (None, None))
+            if seen is None or not np.array_equal(seen, y):
+                a = _spline_callable(CubicSpline(x, y), self.t0)
+                memo[key] = (y, a)
+            out.append(a)
+        return out
 
 
 def _spline_callable(spline, t0):
@@ -363,6 +373,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     change = math.inf
     reach = 0.0  # marching: the iterate is right on [0, reach]
     keep: dict = {}  # marching: the blow's snapshots (module docstring, "Marching")
+    splines: dict = {}  # the iterates' splines of a (_Incoming.callables)
     for _ in range(bound):
         upto = min(reach + 2.0 * T0, D) if march else D
         # (the blow is needed to upto - T0 only, but to its end where its change decides)
@@ -383,7 +394,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
             D = cap
         whole = upto >= D and reach >= D  # (the iterate over the whole blow: its change decides)
         breaks = _breaks(ex, T0, D, t0, upto if not whole else None)
-        incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks)
+        incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks, splines)
         follow = drive.abilities.end_flight
         if follow is None:
             raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
