@@ -101,16 +101,32 @@ def _primal(bmap, q, v):
 
 
 def kept_primal(ws, scale, duration):
-    """A primal blow's switch log kept from a run that logged its switches (the coupled blow's last
-    iterate, its run certified over at ``duration``: :mod:`~impactbar.laws.rodrock.coupled_exact`), for
-    :func:`tangents` without solving the blow again: ``(ws, scale)``, ``ws`` the run's arrays but its
-    pool's (``None``: the next blow's), copied, its horizon ``duration``; or None where the run logged
-    nothing, its log overflowed or a switch search was given up (the primal then solved again, by
-    :func:`_primal`)."""
+    """A primal blow's switch log kept from a run that logged its switches, for :func:`tangents`
+    without solving the blow again (theory §11, "The coupled blow": the coupled blow's last force
+    round, :mod:`~impactbar.laws.rodrock.coupled_exact`).
+
+    Parameters
+    ----------
+    ws : tuple
+        The run's workspace (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s), its switch log
+        written from the impact on.
+    scale : float
+        The run's force scale.
+    duration : float
+        The blow's end (model time from the impact), where the run was certified over: the tangent
+        runs' horizon.
+
+    Returns
+    -------
+    tuple or None
+        ``(ws, scale)`` as :func:`_primal` gives them, ``ws`` the run's arrays copied but its pool's
+        (``None``: the next blow's); None where the run logged nothing, its log overflowed or a
+        switch search was given up (the primal then solved again, by :func:`_primal`).
+    """
     RD, CI = ws[WS_RD], ws[WS_CI]
     if RD.shape[0] <= 1 or RD[RD_HEAD, RD_FULL].real != 0.0 or CI[CI_GIVEUP] != 0:
         return None
-    light = (None, None, None, None, *(x.copy() for x in ws[4:]))
+    light = (None,) * WS_CNT + tuple(x.copy() for x in ws[WS_CNT:])  # (the pool's arrays: before CNT)
     light[WS_PR][PR_TMAX] = duration  # (the tangent runs' horizon: the blow's end)
     return light, scale
 
