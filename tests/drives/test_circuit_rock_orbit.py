@@ -89,17 +89,31 @@ def test_forward_differences_of_the_blow_are_the_central_ones_to_their_step(both
 
 
 def _counted_exact_blows(monkeypatch):
-    """A list whose one entry counts the exact coupled blows solved from here on."""
+    """A list whose entries count the exact coupled blows solved from here on, the exact solver's
+    runs (``ExactBlowMap.solve``: the blows' rounds of the drive's force, and any other), and those
+    of them outside a coupled blow (a tangent's primal solved again)."""
     import impactbar.laws.rodrock.coupled_exact as CE
+    from impactbar.laws.rodrock.exactmap import ExactBlowMap
 
-    count = [0]
-    real = CE.driven_exact_contact
+    count = [0, 0, 0]
+    real, solve = CE.driven_exact_contact, ExactBlowMap.solve
+    inside = [False]
 
     def counted(*args, **kwargs):
         count[0] += 1
-        return real(*args, **kwargs)
+        inside[0] = True
+        try:
+            return real(*args, **kwargs)
+        finally:
+            inside[0] = False
+
+    def solved(self, *args, **kwargs):
+        count[1] += 1
+        count[2] += not inside[0]
+        return solve(self, *args, **kwargs)
 
     monkeypatch.setattr(CE, "driven_exact_contact", counted)
+    monkeypatch.setattr(ExactBlowMap, "solve", solved)
     return count
 
 
@@ -202,8 +216,10 @@ def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
     (measured). The lattice orbit is found from the orbit at 8 cells (``RodRock.coarse_start``: a
     chord of 3 steps, not the settling at the lattice's own grid) and its monodromy takes the blows'
     forward differences: the same 4 exact blows, the figures 1.3e-10 to 3.0e-10 and the largest
-    multiplier 8.1e-10 from the orbit found without them (measured). And its root is the exact
-    problem's: a full Newton step from it moves the unknowns by less than 2e-9 of their size."""
+    multiplier 8.1e-10 from the orbit found without them (measured). The blows' exact solver runs
+    only in their rounds of the drive's force (the tangent takes the last round's switch log). And
+    its root is the exact problem's: a full Newton step from it moves the unknowns by less than 2e-9
+    of their size."""
     import dataclasses
     import tomllib
 
@@ -233,6 +249,9 @@ def test_the_exact_blows_polish_starts_where_their_blows_end(monkeypatch):
     monkeypatch.setattr(OC, "blow_jacobian", jacobian)
     orbit = find_orbit(exact, drifter.drive())
     assert count[0] <= 4
+    # their runs: 7 rounds of the drive's force a blow, 28 (measured), and none outside a blow (the
+    # tangent takes the last round's switch log: 29 while it solved its primal again)
+    assert count[1] <= 28 and count[2] == 0, count
     # the lattice's Jacobians all by forward differences (five blows each, not ten): the 8 cells'
     # chord's and monodromy's, then the lattice orbit's monodromy (its chord from the 8 cells' orbit
     # takes that one), which only starts the polish's chord; the polish's Jacobian is it (not again)

@@ -187,3 +187,27 @@ def test_marching_gives_the_plain_iterations_blow(arrival):
     # ended at the law's window and the arriving wave's spline took its ends on the breaks: the two
     # iterations now restart the drive's integration at other breaks)
     assert np.allclose(fast.gaps, plain.gaps, rtol=1e-7, atol=0.0)
+
+
+def test_the_iterates_take_their_predecessors_splines_where_a_is_the_same(arrival, monkeypatch):
+    """The march's iterates take again the arriving wave's spline of an interval whose values are
+    their predecessor's to the bit (an iterate's early waves are its predecessor's): fewer splines
+    made (measured on this arrival: 14 of 71), the same blow to the bit as with every spline made
+    afresh."""
+    import impactbar.laws.rodrock.coupled_exact as CE
+
+    made = []
+    real = CE._spline_callable
+    monkeypatch.setattr(CE, "_spline_callable", lambda *a: made.append(1) or real(*a))
+    fast = CE.driven_exact_contact(*arrival)
+    kept = len(made)
+    made.clear()
+    callables = CE._Incoming.callables
+    monkeypatch.setattr(CE._Incoming, "callables", lambda self, breaks, memo=None: callables(self, breaks))
+    fresh = CE.driven_exact_contact(*arrival)
+    assert 0 < kept < len(made), (kept, len(made))
+    assert fast.t_release == fresh.t_release and fast.drive_state.mode == fresh.drive_state.mode
+    for a, b in ((fast.v_after, fresh.v_after), (fast.q_after, fresh.q_after),
+                 (fast.drive_state.z, fresh.drive_state.z), (fast.gaps, fresh.gaps)):
+        assert np.array_equal(np.asarray(a), np.asarray(b))
+    assert fast.record.work_on_rock == fresh.record.work_on_rock and fast.drive_work == fresh.drive_work

@@ -129,3 +129,68 @@ def test_the_thinned_direction_gives_the_unthinned_ones_tangent(blow, monkeypatc
     assert off(G) <= 1e-8
     assert off(tangent(2.0)) <= 1e-8
     assert off(tangent(2.0, np.inf)) > 1e-6
+
+
+def test_the_tangent_takes_the_blows_own_switch_log(blow, monkeypatch):
+    """The blow's last iterate logs its switches from the impact on (each iterate goes on from its
+    predecessor's snapshot, whose log it carries): the tangent solves no blow, and it is the tangent
+    of the primal blow solved again for its own log, to the bit. A log that overflowed is not kept
+    (the primal then solved again, once)."""
+    from impactbar.laws.rodrock._records import RD_FULL, RD_HEAD, RD_ROWS, WS_RD
+    from impactbar.laws.rodrock.exactmap import ExactBlowMap
+
+    arrival, (_, res, after), G = blow
+    model, drive, state = arrival[:3]
+    rec = res.record
+    solves = []
+    real = ExactBlowMap.solve
+
+    def counted(self, *args, **kwargs):
+        solves.append(kwargs.get("log", 0))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(ExactBlowMap, "solve", counted)
+    np.testing.assert_array_equal(coupled_blow_tangent(model, drive, res, after, state), G)
+    assert solves == []
+    (ws, scale), _ = rec.switch_log
+    assert int(ws[WS_RD][RD_HEAD, RD_ROWS].real) > 0  # (the separations and re-contacts: measured 10)
+    monkeypatch.setattr(rec, "switch_log", None)
+    np.testing.assert_array_equal(coupled_blow_tangent(model, drive, res, after, state), G)
+    assert len(solves) == 1 and solves[0] > 0  # (the primal again, with its log)
+    from impactbar.laws.rodrock.exactjac import kept_primal
+
+    full = (*ws[:WS_RD], ws[WS_RD].copy(), *ws[WS_RD + 1:])
+    full[WS_RD][RD_HEAD, RD_FULL] = 1.0
+    assert kept_primal(ws, scale, rec.duration) is not None
+    assert kept_primal(full, scale, rec.duration) is None
+
+
+def test_the_rounds_end_where_what_is_left_is_estimated_below_the_tolerance(blow, monkeypatch):
+    """The rounds end where the change left to the fixed point, estimated from the last two rounds'
+    contraction, is below ``TANGENT_TOL``: 4 rounds on this blow (changes 1.7e-2, 8.8e-5, 6.6e-8 of
+    its size, 4.9e-11 left estimated), where the plain rule (the last change below it) takes 5; the
+    tangent then moves by 2.4e-11 of its size (measured), within the estimate."""
+    import impactbar.laws.rodrock.coupled_tangent as CT
+    from impactbar.laws.rodrock import exactjac as EJ
+
+    arrival, (_, res, after), G = blow
+    model, drive, state = arrival[:3]
+    runs = []
+    real = EJ.tangents
+
+    def counted(*args, **kwargs):
+        runs.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(EJ, "tangents", counted)
+    np.testing.assert_array_equal(coupled_blow_tangent(model, drive, res, after, state), G)
+    assert len(runs) == 4
+    runs.clear()
+    settled = CT._settled
+    monkeypatch.setattr(CT, "_settled", lambda change, last: change <= CT.TANGENT_TOL)
+    plain = coupled_blow_tangent(model, drive, res, after, state)
+    assert len(runs) == 5
+    moved = np.max(np.abs(plain - G)) / np.max(np.abs(plain))
+    assert 0.0 < moved <= 1e-10, moved
+    assert not settled(8.8e-5, 1.7e-2) and settled(6.6e-8, 8.8e-5) and settled(1e-11, 1e-3)
+    assert not settled(2e-10, np.inf) and not settled(2e-10, 1e-10)  # (no estimate, no contraction)

@@ -232,11 +232,13 @@ class _Incoming:
             cur[idx[~first]] -= 2.0 * T0
         return out
 
-    def callables(self, breaks):
+    def callables(self, breaks, memo=None):
         """``a`` on each interval of ``breaks`` (model times, where ``a`` may jump) as a callable of
         the model time: a cubic spline through its exact values ``T_0 / SAMPLES`` apart (its error
         ``O(h^4)`` where ``a`` is smooth, ``O(h)`` over a step at a kink: ``O(h^2)`` in what the
-        drive integrates)."""
+        drive integrates). ``memo`` (a dict, the blow's iterates'): an interval's callable kept by
+        its ends and taken again where its values are the same to the bit (the march's iterates: an
+        iterate's early waves are its predecessor's)."""
         from scipy.interpolate import CubicSpline
 
         xs, xvs = [], []
@@ -253,7 +255,15 @@ class _Incoming:
         # (the wave at all the samples at once: each value the one it has alone)
         values = np.split(-2.0 * self.arriving(np.concatenate(xvs)) / self.Z0,
                           np.cumsum([x.size for x in xs])[:-1])
-        return [_spline_callable(CubicSpline(x, y), self.t0) for x, y in zip(xs, values, strict=True)]
+        memo = {} if memo is None else memo
+        out = []
+        for key, x, y in zip(zip(breaks[:-1], breaks[1:], strict=True), xs, values, strict=True):
+            seen, a = memo.get(key, (None, None))
+            if seen is None or not np.array_equal(seen, y):
+                a = _spline_callable(CubicSpline(x, y), self.t0)
+                memo[key] = (y, a)
+            out.append(a)
+        return out
 
 
 def _spline_callable(spline, t0):
@@ -343,6 +353,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     True
     """
     from ...loads import FourierLoad
+    from .exactjac import LOG_ROWS, kept_primal
     from .exactmap import ExactBlowMap, ExactRockContact, initial_waves
 
     q = np.array(q, dtype=float)
@@ -362,6 +373,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     change = math.inf
     reach = 0.0  # marching: the iterate is right on [0, reach]
     keep: dict = {}  # marching: the blow's snapshots (module docstring, "Marching")
+    splines: dict = {}  # the iterates' splines of a (_Incoming.callables)
     for _ in range(bound):
         upto = min(reach + 2.0 * T0, D) if march else D
         # (the blow is needed to upto - T0 only, but to its end where its change decides)
@@ -370,7 +382,10 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
             # up to where this force is held; the next blow goes on from the last it shares)
             keep = {"resume": keep.get("snapshots"), "stops": T0 * np.arange(1, math.floor(reach / T0) + 2)}
         ex, finish = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap,
-                                certified=True, defer=True, keep=keep if march else None)
+                                certified=True, defer=True, keep=keep if march else None,
+                                log=LOG_ROWS if march else 0)  # (each iterate's: the last one's
+        # is its tangent's schedule, coupled_tangent; a log that overflows is dropped, the tangent then
+        # solving the blow again for its own)
         # (the last one's energies and copies: finish)
         if ex.ended_by in ENDS:  # certified over at ex.duration with this force
             D = float(ex.duration)
@@ -379,7 +394,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
             D = cap
         whole = upto >= D and reach >= D  # (the iterate over the whole blow: its change decides)
         breaks = _breaks(ex, T0, D, t0, upto if not whole else None)
-        incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks)
+        incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks, splines)
         follow = drive.abilities.end_flight
         if follow is None:
             raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
@@ -404,8 +419,10 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     else:
         ex = finish()
     bmap.duration = float(ex.duration)
-    q_after, v_after = bmap.state_after(ex)
+    q_after, v_after, on_stop = bmap.state_after(ex, on_stop=True)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
+    # (marching: the last iterate's switch log, logged from the impact on, the tangent's schedule)
+    rec.switch_log = None if not march else (kept_primal(*keep["workspace"], float(ex.duration)), on_stop)
     rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
     rec.coupling = Coupling(breaks, [a.spline for a in incoming], Z0)  # (the blow's tangent: coupled_tangent)
     work = float(sum(p.piston_work() for p in fl.pieces))

@@ -334,7 +334,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     # (_keep: the coupled blow's iterates, each going on from where the last one's drive was its own:
     # _keep["resume"] the last run's snapshots, _keep["stops"] the times this one takes its own at,
-    # given back as _keep["snapshots"]; :func:`_resumed`)
+    # given back as _keep["snapshots"], and the run's (ws, scale) as _keep["workspace"]: its switch
+    # log; :func:`_resumed`)
     stops = () if _keep is None else _keep.get("stops", ())
     snaps: list = []
     ws = None
@@ -388,8 +389,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
                 + ("give a t_max" if t_max is None else f"give a t_max below {ws[S.WS_CT][S.CT_T]:.6g}")
                 + ", or use method='lattice'")
         ws = None
-    if _keep is not None:
-        _keep["snapshots"] = snaps
+    if _keep is not None:  # (and the run's workspace and scale: its switch log, the tangent's schedule)
+        _keep["snapshots"], _keep["workspace"] = snaps, (ws, scale)
     if lean:
         return ws, scale
     if not _energies:  # (a fixed horizon's run reads no energy: its pieces are the same without them)

@@ -52,6 +52,7 @@ from ._records import (  # the records' slots and the pool's columns
     PR_NODW,
     PR_P0,
     PR_RECORD,
+    PR_TMAX,
     PR_WINDOW,
     PR_ZBIT,
     RD_FULL,
@@ -73,7 +74,7 @@ from ._records import (  # the records' slots and the pool's columns
     WS_SZ,
 )
 
-__all__ = ["exact_impact_map", "tangents"]
+__all__ = ["exact_impact_map", "kept_primal", "tangents"]
 
 #: rows of the primal's switch log first asked for (doubled while it overflows)
 LOG_ROWS = 64
@@ -97,6 +98,37 @@ def _primal(bmap, q, v):
     if CI[CI_GIVEUP] != 0:
         return None
     return ws, scale
+
+
+def kept_primal(ws, scale, duration):
+    """A primal blow's switch log kept from a run that logged its switches, for :func:`tangents`
+    without solving the blow again (theory §11, "The coupled blow": the coupled blow's last force
+    round, :mod:`~impactbar.laws.rodrock.coupled_exact`).
+
+    Parameters
+    ----------
+    ws : tuple
+        The run's workspace (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s), its switch log
+        written from the impact on.
+    scale : float
+        The run's force scale.
+    duration : float
+        The blow's end (model time from the impact), where the run was certified over: the tangent
+        runs' horizon.
+
+    Returns
+    -------
+    tuple or None
+        ``(ws, scale)`` as :func:`_primal` gives them, ``ws`` the run's arrays copied but its pool's
+        (``None``: the next blow's); None where the run logged nothing, its log overflowed or a
+        switch search was given up (the primal then solved again, by :func:`_primal`).
+    """
+    RD, CI = ws[WS_RD], ws[WS_CI]
+    if RD.shape[0] <= 1 or RD[RD_HEAD, RD_FULL].real != 0.0 or CI[CI_GIVEUP] != 0:
+        return None
+    light = (None,) * WS_CNT + tuple(x.copy() for x in ws[WS_CNT:])  # (the pool's arrays: before CNT)
+    light[WS_PR][PR_TMAX] = duration  # (the tangent runs' horizon: the blow's end)
+    return light, scale
 
 
 def _plus(bmap, ws, scale):

@@ -485,12 +485,15 @@ class ExactBlowMap:
         new rest position (on the rock, its permanent penetration) or the long rod's end."""
         return shank - gap - (permanent if self.rod.on_rock else shank)
 
-    def state_after(self, ex):
+    def state_after(self, ex, on_stop=False):
         """The modal state at the end of ``ex``, positions from the stop of the next flight (the
-        shank's new rest position, or the long rod's end; the end pressed beyond it put on it)."""
+        shank's new rest position, or the long rod's end; the end pressed beyond it put on it); with
+        ``on_stop`` a third value: whether it was (the tangent's, :func:`~.exactjac.tangents`)."""
         end = self._end(ex.shank_displacement, ex.gap, ex.permanent_penetration)
         qa, va = project(self.basis, ex._hist, ex.duration, end)
-        return self._on_stop(qa), va
+        over = float(self.basis.end_weights @ qa) > 0.0
+        qa = self._on_stop(qa)
+        return (qa, va, over) if on_stop else (qa, va)
 
     def _on_stop(self, qa):
         over = float(self.basis.end_weights @ qa)
@@ -563,6 +566,10 @@ class ExactRockContact(RockContact):
         #: under a drive: what the drive met over the blow (its tangent's data, a
         #: :class:`~impactbar.laws.rodrock.coupled_exact.Coupling`)
         self.coupling = None
+        #: under a drive, marching: ``(kept, on_stop)``, the blow's switch log as
+        #: :func:`~impactbar.laws.rodrock.exactjac.kept_primal` keeps it (None where it did not) and
+        #: whether the end was put on the stop (its tangent's, without solving the blow again)
+        self.switch_log = None
 
     def _at(self, tau: float):
         """The exact blow solved again up to ``tau`` (cached)."""
