@@ -35,7 +35,7 @@ class _FlowParts(NamedTuple):
     hv: np.ndarray  # i k H_nk p_k
     rigid: np.ndarray  # w2 == 0
     flex: np.ndarray
-    pos: np.ndarray  # w2 > 0
+    pos_at: object  # where w2 > 0: a slice where those modes are contiguous, else their indices
     w2_pos: np.ndarray  # w2[pos, None]
     w2_safe: np.ndarray  # w2 with 1 at the rigid modes
     w2f: np.ndarray  # w2[flex, None]
@@ -200,7 +200,7 @@ class FourierLoad(Load):
         e = np.exp(1j * np.outer(self._k, t))  # (K', T)
         q = (parts.hp @ e).real
         v = (parts.hv @ e).real
-        q[parts.pos] += self.p0 / parts.w2_pos
+        q[parts.pos_at] += self.p0 / parts.w2_pos
         return q, v
 
     def _flow_parts(self, w2, d) -> _FlowParts:
@@ -233,7 +233,10 @@ class FourierLoad(Load):
         # the compiled flow's harmonics: np.stack makes them contiguous and writable (a read-only
         # array would be another type to numba, and so another compilation; no kernel writes them)
         H = np.stack((hp.real, hp.imag, hv.real, hv.imag))  # (4, M, K)
-        parts = _FlowParts(hp, hv, rigid, flex, pos, w2[pos, None], np.where(rigid, 1.0, w2), w2f, rows,
+        at = np.nonzero(pos)[0]
+        if at.size and at[-1] - at[0] + 1 == at.size:  # (a slice indexes faster, the same entries)
+            at = slice(int(at[0]), int(at[-1]) + 1)
+        parts = _FlowParts(hp, hv, rigid, flex, at, w2[pos, None], np.where(rigid, 1.0, w2), w2f, rows,
                            take, folded, lam, kind, lamv, H)
         return remember(_SHARED_FLOW_PARTS, key, parts, 64)
 
@@ -255,7 +258,7 @@ class FourierLoad(Load):
             # underdamped flexible modes (the rule): Phi(tau) applied to (dq, dv) folded into
             # e^{-d tau/2} (a cos(lam tau) + b sin(lam tau)), the coefficients computed once
             lam = parts.lam
-            dqf, dvf = dq[parts.rows], dv[parts.rows]
+            dqf, dvf = dq[rows], dv[rows]
             cq, sq = dqf, (0.5 * d * dqf + dvf) / lam
             cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
         if use_fast("loads.flow") and (folded or parts.rows.size == 0):
