@@ -48,6 +48,14 @@ class _FlowParts(NamedTuple):
     H: np.ndarray  # (hp.real, hp.imag, hv.real, hv.imag), shape (4, M, K')
 
 
+def _as_slice(idx: np.ndarray):
+    """The increasing indices ``idx`` as a slice where they are a contiguous run (a slice indexes
+    faster, the same entries), else ``idx``."""
+    if idx.size and int(idx.max()) - int(idx.min()) + 1 == idx.size:
+        return slice(int(idx.min()), int(idx.max()) + 1)
+    return idx
+
+
 class FourierLoad(Load):
     r"""A load given by finitely many harmonics (eq. 7).
 
@@ -222,9 +230,7 @@ class FourierLoad(Load):
         lam2 = w2f[:, 0] - 0.25 * d * d
         folded = rows.size > 0 and bool(np.all(lam2 > 0.0))
         lam = np.sqrt(lam2)[:, None] if folded else None
-        take = rows
-        if folded and rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
-            take = slice(int(rows[0]), int(rows[-1]) + 1)
+        take = _as_slice(rows) if folded else rows  # contiguous rows: updated in place
         kind = np.where(rigid, 2, 0).astype(np.int64)
         lamv = np.zeros(w2.size)
         if folded:
@@ -233,10 +239,8 @@ class FourierLoad(Load):
         # the compiled flow's harmonics: np.stack makes them contiguous and writable (a read-only
         # array would be another type to numba, and so another compilation; no kernel writes them)
         H = np.stack((hp.real, hp.imag, hv.real, hv.imag))  # (4, M, K)
-        at = np.nonzero(pos)[0]
-        if at.size and at[-1] - at[0] + 1 == at.size:  # (a slice indexes faster, the same entries)
-            at = slice(int(at[0]), int(at[-1]) + 1)
-        parts = _FlowParts(hp, hv, rigid, flex, at, w2[pos, None], np.where(rigid, 1.0, w2), w2f, rows,
+        parts = _FlowParts(hp, hv, rigid, flex, _as_slice(np.nonzero(pos)[0]), w2[pos, None],
+                           np.where(rigid, 1.0, w2), w2f, rows,
                            take, folded, lam, kind, lamv, H)
         return remember(_SHARED_FLOW_PARTS, key, parts, 64)
 
