@@ -151,11 +151,13 @@ def test_many_starts_of_a_constant_drive():
 @pytest.mark.parametrize("k", [1, 3, 10])
 @pytest.mark.parametrize("n", [0, 1, 8, 20])
 def test_tabled_moments_are_the_kernels_to_the_bit(k, n):
-    """The phase series' moments of a one-harmonic load from its tabled nodes (one table per window,
-    starts and harmonic, the mean load added at each node) against the compiled quadrature at each
-    node: the same floats, the sign of every zero included, at mean loads of both signs and zero."""
+    """The phase series' moments of a load of one harmonic or none from its tabled nodes (one table
+    per window, starts and harmonic, the mean load added at each node) against the compiled
+    quadrature at each node: the same floats, the sign of every zero included, at mean loads of both
+    signs and zero."""
     rng = np.random.default_rng(7 + k + n)
-    cases = ((10.1 / math.pi, 0.014, 1.0), (0.7, -0.3, 0.4 - 0.9j), (50.0, 0.0, -2.0), (3.0, 1.3, 0.5j))
+    cases = ((10.1 / math.pi, 0.014, 1.0), (0.7, -0.3, 0.4 - 0.9j), (50.0, 0.0, -2.0), (3.0, 1.3, 0.5j),
+             (2.0, 0.8, 0.0), (2.0, -0.0, 0.0))  # (the last two a constant load: no harmonic)
     for s, p0, pk in cases:
         load = FourierLoad(p0, [0.0] * (k - 1) + [pk])
         view, rate = load.abilities.kernel.view, float(k) / s

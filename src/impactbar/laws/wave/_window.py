@@ -124,11 +124,11 @@ def window_moments(load, s, rate, t0s, jumps, gl_x, gl_w, ic_, is_):
 
 @numba.njit(cache=CACHE, nogil=True)
 def tabled_moments(p0, w, a, c, sn, ic_, is_):
-    """:func:`window_moments` for a load ``p0 + a(t)`` of one harmonic without jumps, from its nodes
-    tabled once (``impact._node_table``: the weights ``w`` (2, J), the harmonic ``a`` at each start's
-    nodes (P, 2, J), ``cos, sin(n pi theta)`` ``c, sn`` (2, J, M)): each node's load ``p0 + a``, weighted,
-    added to ``ic_[i], is_[i]`` (shape (P, 2, M)) node by node in the kernel's order, so the same
-    floats, without the nodes' cosines and sines (which do not depend on ``p0``)."""
+    """:func:`window_moments` for a load ``p0 + a(t)`` of one harmonic or none, without jumps, from
+    its nodes tabled once (``impact._node_table``: the weights ``w`` (2, J), the harmonic ``a`` at each
+    start's nodes (P, 2, J), ``cos, sin(n pi theta)`` ``c, sn`` (2, J, M)): each node's load
+    ``p0 + a``, weighted, added to ``ic_[i], is_[i]`` (shape (P, 2, M)) node by node in the kernel's
+    order, so the same floats, without the nodes' cosines and sines (which do not depend on ``p0``)."""
     M = ic_.shape[2]
     for i in range(a.shape[0]):
         for half in range(2):

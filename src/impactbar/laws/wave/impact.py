@@ -167,7 +167,7 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
         return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
                 np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
     view, rate = own.kernel.view, _window_rate(load, s)
-    if view.ks.size == 1:  # one harmonic (the pneumatic load): the quadrature's nodes tabled once
+    if view.ks.size <= 1:  # one harmonic (the pneumatic load) or none: the nodes tabled once
         mc, ms = _tabled_moments(view, s, rate, t0s, n_modes + 1)
     else:
         mc, ms = _kernel_moments(tuple(view), s, rate, t0s, np.empty(0), n_modes + 1)
@@ -181,15 +181,15 @@ _NODE_TABLES: dict = {}
 
 def _node_table(view, s: float, rate: float, t0s: np.ndarray, M: int):
     """What the compiled quadrature of the window's moments (``_window._window_moments``, a load of
-    one harmonic and no jumps) computes at its nodes apart from the mean load ``p0``: the weights
-    ``w``, shape ``(2, J)`` (rows: the halves ``[0, 1]``, ``[1, 2]``; ``J`` nodes each), the harmonic
-    ``a = Re(p_k e^{i k t})`` at each start's nodes, shape ``(P, 2, J)``, and ``cos, sin(n pi theta)``
-    by the kernel's rotation, shape ``(2, J, M)`` each; the load there is ``p0 + a``. The same floats
-    as the kernel's (the same operations in the same order; ``math``'s ``cos``, ``sin`` are the C
-    library's, as compiled code's). Kept per window, starts and harmonic: a chart's load factors
-    differ only in ``p0`` (theory §4b)."""
-    (k,), (pr,), (pim,) = view.ks.tolist(), view.pr.tolist(), view.pim.tolist()
-    key = (float(s), float(rate), t0s.tobytes(), M, k, pr, pim)
+    one harmonic or none, and no jumps) computes at its nodes apart from the mean load ``p0``: the
+    weights ``w``, shape ``(2, J)`` (rows: the halves ``[0, 1]``, ``[1, 2]``; ``J`` nodes each), the
+    harmonic ``a = Re(p_k e^{i k t})`` (``-0.0`` without a harmonic) at each start's nodes, shape
+    ``(P, 2, J)``, and ``cos, sin(n pi theta)`` by the kernel's rotation, shape ``(2, J, M)`` each;
+    the load there is ``p0 + a``. The same floats as the kernel's (the same operations in the same
+    order; ``math``'s ``cos``, ``sin`` are the C library's, as compiled code's). Kept per window,
+    starts and harmonic: a chart's load factors differ only in ``p0`` (theory §4b)."""
+    harmonic = (*view.ks.tolist(), *view.pr.tolist(), *view.pim.tolist())  # (k, Re p_k, Im p_k), or none
+    key = (float(s), float(rate), t0s.tobytes(), M, harmonic)
     table = _NODE_TABLES.get(key)
     if table is not None:
         return table
@@ -211,8 +211,12 @@ def _node_table(view, s: float, rate: float, t0s: np.ndarray, M: int):
         for n in range(M):
             C[j, n], S[j, n] = cn, sn
             cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
-    a = np.array([[pr * math.cos(k * t) - pim * math.sin(k * t) for t in (t0 + th / s for th in ths)]
-                  for t0 in t0s.tolist()])
+    if harmonic:
+        k, pr, pim = harmonic
+        a = np.array([[pr * math.cos(k * t) - pim * math.sin(k * t) for t in (t0 + th / s for th in ths)]
+                      for t0 in t0s.tolist()])
+    else:  # a constant load: p0 + (-0.0) is p0, its zero's sign included
+        a = np.full((t0s.size, 2 * J), -0.0)
     table = (np.array(ws).reshape(2, J), a.reshape(t0s.size, 2, J), C.reshape(2, J, M), S.reshape(2, J, M))
     for x in table:
         x.flags.writeable = False
@@ -220,8 +224,8 @@ def _node_table(view, s: float, rate: float, t0s: np.ndarray, M: int):
 
 
 def _tabled_moments(view, s: float, rate: float, t0s: np.ndarray, M: int):
-    """:func:`_kernel_moments` for a load of one harmonic without jumps, the same floats: its nodes
-    tabled once (:func:`_node_table`), each start's moments from them by one compiled call
+    """:func:`_kernel_moments` for a load of one harmonic or none, without jumps, the same floats:
+    its nodes tabled once (:func:`_node_table`), each start's moments from them by one compiled call
     (``_window.tabled_moments``) that adds each node's weighted load ``p0 + a`` in the kernel's order."""
     w, a, c, sn = _node_table(view, s, rate, t0s, M)
     mc, ms = np.zeros((t0s.size, 2, M)), np.zeros((t0s.size, 2, M))
