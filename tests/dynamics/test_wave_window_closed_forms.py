@@ -167,3 +167,18 @@ def test_tabled_moments_are_the_kernels_to_the_bit(k, n):
             for x, y in zip(got, ref, strict=True):
                 assert x.shape == y.shape == (t0s.size, 2, n + 1)
                 assert np.array_equal(x.view(np.uint64), y.view(np.uint64))
+
+
+@pytest.mark.parametrize("n", [0, 3, 8])
+def test_a_constant_drive_at_one_start_is_the_kernels_to_the_bit(monkeypatch, n):
+    """A constant load's single window (the wave law's existence edge takes it) from the tabled nodes,
+    with its rates, against the compiled quadrature at each node: the same floats, at any start."""
+    load = FourierLoad(0.45, [0.0])
+    tabled = [impact.window_drive(2.7, 0.3, n, load, t0, derivative=True) for t0 in (0.0, 1.3, -4.0)]
+    with monkeypatch.context() as mp:
+        mp.setattr(impact, "_tabled_moments", lambda view, s, rate, t0s, M: impact._kernel_moments(
+            tuple(view), s, rate, t0s, np.empty(0), M))
+        ref = [impact.window_drive(2.7, 0.3, n, load, t0, derivative=True) for t0 in (0.0, 1.3, -4.0)]
+    for got, want in zip(tabled, ref, strict=True):
+        for x, y in zip(got, want, strict=True):
+            assert np.array_equal(x.view(np.uint64), y.view(np.uint64))

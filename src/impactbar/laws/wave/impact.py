@@ -90,6 +90,9 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     exact = _exact_moments(view, wl, npi) if n_modes >= _CLOSED_FROM else None
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact
+    elif view is not None and view.kind == FOURIER and not view.ks.size:  # a constant load: its table
+        (mc,), (ms,) = _tabled_moments(view, s, wl.rate, np.array([float(t0)]), n_modes + 1)
+        (ca, cb), (sa, sb) = mc, ms
     elif view is not None:  # the compiled quadrature (the same panels)
         (mc,), (ms,) = _kernel_moments(tuple(view), s, wl.rate, [t0], wl.jumps, n_modes + 1)
         (ca, cb), (sa, sb) = mc, ms
@@ -167,7 +170,7 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
         return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
                 np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
     view, rate = own.kernel.view, _window_rate(load, s)
-    if view.ks.size <= 1:  # one harmonic (the pneumatic load) or none: the nodes tabled once
+    if view.kind == FOURIER and view.ks.size <= 1:  # one harmonic (the pneumatic load) or none: tabled
         mc, ms = _tabled_moments(view, s, rate, t0s, n_modes + 1)
     else:
         mc, ms = _kernel_moments(tuple(view), s, rate, t0s, np.empty(0), n_modes + 1)
@@ -189,7 +192,8 @@ def _node_table(view, s: float, rate: float, t0s: np.ndarray, M: int):
     order; ``math``'s ``cos``, ``sin`` are the C library's, as compiled code's). Kept per window,
     starts and harmonic: a chart's load factors differ only in ``p0`` (theory §4b)."""
     harmonic = (*view.ks.tolist(), *view.pr.tolist(), *view.pim.tolist())  # (k, Re p_k, Im p_k), or none
-    key = (float(s), float(rate), t0s.tobytes(), M, harmonic)
+    # (without a harmonic nothing depends on the starts but their number)
+    key = (float(s), float(rate), t0s.tobytes() if harmonic else t0s.size, M, harmonic)
     table = _NODE_TABLES.get(key)
     if table is not None:
         return table
