@@ -106,7 +106,7 @@ NOT_RECORDS = {
     "laws/wave/periodic.py": {"DP", "coef", "gq", "orders", "p12", "phases", "qm",
                               "y_plus"},  # DP[0]: the impact map's Jacobian's first row; modal components
     "laws/wave/sustained.py": {"below", "nxt", "start"},  # sequences' first and last entries
-    "loads/fourier.py": {"_k", "_pk", "ks", "pks", "rows", "tau"},  # harmonics' first and last
+    "loads/fourier.py": {"_k", "_pk", "ks", "pks", "tau"},  # harmonics' first and last
     "model.py": {"ends", "kappa"},  # the mode shapes at the two ends (rows of one array); the rigid mode's
     "orbits/_admissibility_search.py": {"bufs", "gm",
                                         "upper"},  # the first of four like buffers; the first bound

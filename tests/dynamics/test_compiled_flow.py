@@ -149,3 +149,36 @@ def test_phased_column_equals_numpy_flow():
                 scale = 1.0 + np.max(np.abs(qr)) + np.max(np.abs(vr))
                 assert np.max(np.abs(q - qr)) < 1e-12 * scale and np.max(np.abs(v - vr)) < 1e-12 * scale
         assert np.max(np.abs(C * C + S * S - 1.0)) < 1e-13
+
+
+@pytest.mark.parametrize("n, d", [(0, 0.0), (0, 0.3), (6, 0.0), (6, 0.2), (3, 9.0)])
+def test_flow_parts_shared_by_mean_loads_give_each_load_its_own_floats(n, d):
+    """Loads that differ only in the mean load share their flow's parts (a chart's load factors): the
+    flow and the periodic state of each, from the parts another load computed, are the floats it
+    computes alone (the store emptied first), to the bit; the shared parts are never written."""
+    from impactbar.loads import fourier
+
+    w2 = BarModel(2.3, d, 0.5, n).frequencies ** 2
+    t = np.array([0.4, 2.0, 7.5])
+    q0, v0 = np.linspace(-0.2, 0.3, n + 1), np.linspace(0.1, -0.4, n + 1)
+
+    def states(load):
+        flow = load.flow(w2, d, 0.4, q0, v0)
+        return (*flow(t), *load.periodic_state(w2, d, t))
+
+    loads = [FourierLoad(p0, [0.0, 0.7 - 0.2j, 0.0, 0.3]) for p0 in (0.9, -0.35, 0.0)]
+    alone = []
+    for load in loads:
+        fourier._SHARED_FLOW_PARTS.clear()
+        alone.append(states(load))
+    fourier._SHARED_FLOW_PARTS.clear()
+    states(CosineLoad(0.1, 1.0))  # another harmonic: parts of its own
+    first = states(FourierLoad(2.5, [0.0, 0.7 - 0.2j, 0.0, 0.3]))
+    parts = [np.copy(a) for p in fourier._SHARED_FLOW_PARTS.values() for a in p if isinstance(a, np.ndarray)]
+    assert len(fourier._SHARED_FLOW_PARTS) == 2 and len(first) == 4
+    for load, own in zip(loads, alone, strict=True):
+        for x, y in zip(states(load), own, strict=True):
+            assert np.array_equal(x.view(np.uint64), y.view(np.uint64))
+    after = [a for p in fourier._SHARED_FLOW_PARTS.values() for a in p if isinstance(a, np.ndarray)]
+    assert len(fourier._SHARED_FLOW_PARTS) == 2
+    assert all(np.array_equal(a, b) for a, b in zip(after, parts, strict=True))

@@ -146,3 +146,39 @@ def test_many_starts_of_a_constant_drive():
     g, h = impact.window_drives(3.0, 0.4, 5, FourierLoad(0.7, [0.0]), np.array([0.2, 4.0]))
     np.testing.assert_allclose(h[:, 0], 0.6 * 0.7 / 3.0, rtol=1e-14)
     np.testing.assert_allclose(h[:, 1:], 0.0, atol=1e-15)
+
+
+@pytest.mark.parametrize("k", [1, 3, 10])
+@pytest.mark.parametrize("n", [0, 1, 8, 20])
+def test_tabled_moments_are_the_kernels_to_the_bit(k, n):
+    """The phase series' moments of a load of one harmonic or none from its tabled nodes (one table
+    per window, starts and harmonic, the mean load added at each node) against the compiled
+    quadrature at each node: the same floats, the sign of every zero included, at mean loads of both
+    signs and zero."""
+    rng = np.random.default_rng(7 + k + n)
+    cases = ((10.1 / math.pi, 0.014, 1.0), (0.7, -0.3, 0.4 - 0.9j), (50.0, 0.0, -2.0), (3.0, 1.3, 0.5j),
+             (2.0, 0.8, 0.0), (2.0, -0.0, 0.0))  # (the last two a constant load: no harmonic)
+    for s, p0, pk in cases:
+        load = FourierLoad(p0, [0.0] * (k - 1) + [pk])
+        view, rate = load.abilities.kernel.view, float(k) / s
+        for t0s in (2.0 * math.pi * np.arange(2 * k + 1) / (2 * k + 1), rng.uniform(-9.0, 9.0, 5)):
+            ref = impact._kernel_moments(tuple(view), s, rate, t0s, np.empty(0), n + 1)
+            got = impact._tabled_moments(view, s, rate, t0s, n + 1)
+            for x, y in zip(got, ref, strict=True):
+                assert x.shape == y.shape == (t0s.size, 2, n + 1)
+                assert np.array_equal(x.view(np.uint64), y.view(np.uint64))
+
+
+@pytest.mark.parametrize("n", [0, 3, 8])
+def test_a_constant_drive_at_one_start_is_the_kernels_to_the_bit(monkeypatch, n):
+    """A constant load's single window (the wave law's existence edge takes it) from the tabled nodes,
+    with its rates, against the compiled quadrature at each node: the same floats, at any start."""
+    load = FourierLoad(0.45, [0.0])
+    tabled = [impact.window_drive(2.7, 0.3, n, load, t0, derivative=True) for t0 in (0.0, 1.3, -4.0)]
+    with monkeypatch.context() as mp:
+        mp.setattr(impact, "_tabled_moments", lambda view, s, rate, t0s, M: impact._kernel_moments(
+            tuple(view), s, rate, t0s, np.empty(0), M))
+        ref = [impact.window_drive(2.7, 0.3, n, load, t0, derivative=True) for t0 in (0.0, 1.3, -4.0)]
+    for got, want in zip(tabled, ref, strict=True):
+        for x, y in zip(got, want, strict=True):
+            assert np.array_equal(x.view(np.uint64), y.view(np.uint64))

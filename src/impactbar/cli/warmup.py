@@ -21,7 +21,7 @@ __all__ = ["add_parser", "run", "KERNELS", "KERNELS_NUMBA", "kernel_count"]
 KERNELS = {
     "periodic orbits, flexible bar": 44,
     "periodic orbits, 40 modes and more": 14,
-    "periodic orbits, wave law": 28,
+    "periodic orbits, wave law": 29,
     "simulation, rigid bar": 16,
     "simulation, flexible bar": 6,
     "simulation, wave law": 21,

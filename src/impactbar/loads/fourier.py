@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,6 +22,38 @@ __all__ = ["FourierLoad", "CosineLoad"]
 #: ``H_nk p_k`` of :meth:`FourierLoad._transfer` by ``(d, w2, orders, p_k)``, read-only, the last
 #: 64: the same floats for every load with these harmonics, whatever its mean load
 _SHARED_TRANSFERS: dict = {}
+
+
+#: :meth:`FourierLoad._flow_parts` by ``(d, w2, orders, p_k)``, the last 64: shared, never written
+_SHARED_FLOW_PARTS: dict = {}
+
+
+class _FlowParts(NamedTuple):
+    """:meth:`FourierLoad.flow`'s parts that depend on ``w2, d`` and the harmonics alone."""
+
+    hp: np.ndarray  # H_nk p_k, shape (M, K')
+    hv: np.ndarray  # i k H_nk p_k
+    rigid: np.ndarray  # w2 == 0
+    flex: np.ndarray
+    pos_at: object  # where w2 > 0: a slice where those modes are contiguous, else their indices
+    w2_pos: np.ndarray  # w2[pos, None]
+    w2_safe: np.ndarray  # w2 with 1 at the rigid modes
+    w2f: np.ndarray  # w2[flex, None]
+    rows: np.ndarray  # the flexible modes' indices
+    take: object  # rows, or their slice where contiguous and folded
+    folded: bool  # every flexible mode underdamped
+    lam: np.ndarray | None  # their damped frequencies, shape (F, 1)
+    kind: np.ndarray  # the compiled flow's kinds (2 rigid, 1 folded, 0 else)
+    lamv: np.ndarray  # lam per mode, 0 elsewhere
+    H: np.ndarray  # (hp.real, hp.imag, hv.real, hv.imag), shape (4, M, K')
+
+
+def _as_slice(idx: np.ndarray):
+    """The increasing indices ``idx`` as a slice where they are a contiguous run (a slice indexes
+    faster, the same entries), else ``idx``."""
+    if idx.size and int(idx.max()) - int(idx.min()) + 1 == idx.size:
+        return slice(int(idx.min()), int(idx.max()) + 1)
+    return idx
 
 
 class FourierLoad(Load):
@@ -166,45 +199,74 @@ class FourierLoad(Load):
 
     def periodic_state(self, w2, d, t):
         w2 = np.asarray(w2, dtype=float)
+        return self._periodic_at(self._flow_parts(w2, d), t)
+
+    def _periodic_at(self, parts, t):
+        """:meth:`periodic_state` at the times ``t`` from the parts (:meth:`_flow_parts`) of its
+        ``w2, d``: ``(H p e^{i k t}).real`` with the static deflection ``p0 / w2`` added."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        hp = self._transfer(w2, d)
         e = np.exp(1j * np.outer(self._k, t))  # (K', T)
-        q = (hp @ e).real
-        v = ((hp * (1j * self._k)) @ e).real
-        pos = w2 > 0
-        q[pos] += self.p0 / w2[pos, None]
+        q = (parts.hp @ e).real
+        v = (parts.hv @ e).real
+        q[parts.pos_at] += self.p0 / parts.w2_pos
         return q, v
+
+    def _flow_parts(self, w2, d) -> _FlowParts:
+        """What :meth:`flow` and :meth:`periodic_state` take from ``w2, d`` and the harmonics alone,
+        computed once for every load with these harmonics whatever its mean load (a chart's load
+        factors, a new load each; :data:`_SHARED_FLOW_PARTS`): the same floats as computed per call.
+        Raises at an undamped resonance (:meth:`_transfer`)."""
+        key = (float(d), w2.tobytes(), self._k.tobytes(), self._pk.tobytes())
+        parts = _SHARED_FLOW_PARTS.get(key)
+        if parts is not None:
+            return parts
+        hp = self._transfer(w2, d)
+        hv = hp * (1j * self._k)
+        rigid = w2 == 0.0
+        flex = ~rigid
+        pos = w2 > 0
+        w2f = w2[flex][:, None]
+        rows = np.nonzero(flex)[0]
+        lam2 = w2f[:, 0] - 0.25 * d * d
+        folded = rows.size > 0 and bool(np.all(lam2 > 0.0))
+        lam = np.sqrt(lam2)[:, None] if folded else None
+        take = _as_slice(rows) if folded else rows  # contiguous rows: updated in place
+        kind = np.where(rigid, 2, 0).astype(np.int64)
+        lamv = np.zeros(w2.size)
+        if folded:
+            kind[flex] = 1
+            lamv[flex] = lam[:, 0]
+        # the compiled flow's harmonics: np.stack makes them contiguous and writable (a read-only
+        # array would be another type to numba, and so another compilation; no kernel writes them)
+        H = np.stack((hp.real, hp.imag, hv.real, hv.imag))  # (4, M, K)
+        parts = _FlowParts(hp, hv, rigid, flex, _as_slice(np.nonzero(pos)[0]), w2[pos, None],
+                           np.where(rigid, 1.0, w2), w2f, rows,
+                           take, folded, lam, kind, lamv, H)
+        return remember(_SHARED_FLOW_PARTS, key, parts, 64)
 
     def propagate(self, w2, d, t0, q0, v0, t):
         return self.flow(w2, d, t0, q0, v0)(t)
 
     def flow(self, w2, d, t0, q0, v0):
         w2 = np.asarray(w2, dtype=float)
-        hp = self._transfer(w2, d)  # (M, K')
-        hv = hp * (1j * self._k)
-        qp0, vp0 = self.periodic_state(w2, d, [t0])
+        parts = self._flow_parts(w2, d)
+        hp, hv, rigid, flex, rows = parts.hp, parts.hv, parts.rigid, parts.flex, parts.take
+        qp0, vp0 = self._periodic_at(parts, [t0])
         dq = np.asarray(q0, dtype=float)[:, None] - qp0
         dv = np.asarray(v0, dtype=float)[:, None] - vp0
-        rigid = w2 == 0.0
-        flex = ~rigid
-        static = np.where(rigid, 0.0, self.p0 / np.where(rigid, 1.0, w2))[:, None]
-        w2f = w2[flex][:, None]
+        static = np.where(rigid, 0.0, self.p0 / parts.w2_safe)[:, None]
+        w2f = parts.w2f
         k = self._k
-        rows = np.nonzero(flex)[0]
-        lam2 = w2f[:, 0] - 0.25 * d * d
-        folded = rows.size > 0 and bool(np.all(lam2 > 0.0))
+        folded = parts.folded
         if folded:
             # underdamped flexible modes (the rule): Phi(tau) applied to (dq, dv) folded into
             # e^{-d tau/2} (a cos(lam tau) + b sin(lam tau)), the coefficients computed once
-            lam = np.sqrt(lam2)[:, None]
+            lam = parts.lam
             dqf, dvf = dq[rows], dv[rows]
             cq, sq = dqf, (0.5 * d * dqf + dvf) / lam
             cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
-            if rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
-                rows = slice(int(rows[0]), int(rows[-1]) + 1)
-        if use_fast("loads.flow") and (folded or rows.size == 0):
-            return self._compiled_flow(w2, d, t0, hp, hv, static, rigid, lam if folded else None,
-                                       (cq, sq, cv, sv) if folded else None, dq, dv)
+        if use_fast("loads.flow") and (folded or parts.rows.size == 0):
+            return self._compiled_flow(parts, t0, d, static, (cq, sq, cv, sv) if folded else None, dq, dv)
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -237,31 +299,21 @@ class FourierLoad(Load):
 
         return evaluate
 
-    def _compiled_flow(self, w2, d, t0, hp, hv, static, rigid, lam, folded, dq, dv):
+    def _compiled_flow(self, parts, t0, d, static, folded, dq, dv):
         """:meth:`flow`'s evaluation compiled (:mod:`impactbar.dynamics._load_flow`): the same
         closed form, for underdamped flexible modes and the rigid mode."""
         from ..dynamics.compiled import fourier_flow
 
-        M = w2.size
-        kind = np.where(rigid, 2, 0).astype(np.int64)
-        zeros = np.zeros(M)
-        lamv, cq, sq, cv, sv = zeros, zeros, zeros, zeros, zeros
-        if folded is not None:
-            flex = ~rigid
-            kind[flex] = 1
-            lamv, cq, sq, cv, sv = (np.zeros(M) for _ in range(5))
-            lamv[flex] = lam[:, 0]
-            for dst, src in zip((cq, sq, cv, sv), folded, strict=True):
-                dst[flex] = src[:, 0]
-
         # the per-mode data in two arrays (three with kind), not fourteen: a kernel call counts a
         # reference to each array it is passed, and the certified search passes these once per
-        # evaluation. np.stack makes them fresh, contiguous and writable (a read-only view, as
-        # the cached transfer functions are, would be another type to numba, and so another
-        # compilation of every kernel that takes it)
-        H = np.stack((hp.real, hp.imag, hv.real, hv.imag))  # (4, M, K)
-        V = np.stack((static[:, 0], lamv, cq, sq, cv, sv, dq[:, 0], dv[:, 0]))  # (8, M)
-        args = (float(t0), float(d), float(self.p0), self.kernel_view.ks, H, V, kind)
+        # evaluation; the harmonics' H and the kinds are the parts' own (shared, never written)
+        V = np.zeros((8, static.shape[0]))
+        static_row, lam_row, *folded_rows, dq_row, dv_row = V  # (views: rows written in place)
+        static_row[:], lam_row[:], dq_row[:], dv_row[:] = static[:, 0], parts.lamv, dq[:, 0], dv[:, 0]
+        if folded is not None:  # cq, sq, cv, sv at the flexible modes
+            for dst, src in zip(folded_rows, folded, strict=True):
+                dst[parts.flex] = src[:, 0]
+        args = (float(t0), float(d), float(self.p0), self.kernel_view.ks, parts.H, V, parts.kind)
 
         def evaluate(t):
             return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), args)

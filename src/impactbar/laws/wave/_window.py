@@ -123,6 +123,23 @@ def window_moments(load, s, rate, t0s, jumps, gl_x, gl_w, ic_, is_):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def tabled_moments(p0, w, a, c, sn, ic_, is_):
+    """:func:`window_moments` for a load ``p0 + a(t)`` of one harmonic or none, without jumps, from
+    its nodes tabled once (``impact._node_table``: the weights ``w`` (2, J), the harmonic ``a`` at each
+    start's nodes (P, 2, J), ``cos, sin(n pi theta)`` ``c, sn`` (2, J, M)): each node's load
+    ``p0 + a``, weighted, added to ``ic_[i], is_[i]`` (shape (P, 2, M)) node by node in the kernel's
+    order, so the same floats, without the nodes' cosines and sines (which do not depend on ``p0``)."""
+    M = ic_.shape[2]
+    for i in range(a.shape[0]):
+        for half in range(2):
+            for j in range(w.shape[1]):
+                wp = w[half, j] * (p0 + a[i, half, j])
+                for n in range(M):
+                    ic_[i, half, n] += wp * c[half, j, n]
+                    is_[i, half, n] += wp * sn[half, j, n]
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def wave_window(load_t, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law held in contact throughout: checks that
     the invariant arriving at the rod, ``A(theta)``, stays ``>= 0`` on the scan grid of
@@ -215,4 +232,4 @@ def wave_window(load_t, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
 
 # the window's helpers only kernels call are link-only (their callers hold their code): a first run
 # compiles each once, inside the kernel that calls it, not also alone
-internal_kernels(globals(), python=("window_moments", "wave_window", "scan_step"))
+internal_kernels(globals(), python=("window_moments", "tabled_moments", "wave_window", "scan_step"))

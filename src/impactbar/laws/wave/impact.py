@@ -29,6 +29,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..._shared.bounded import remember
 from ..._shared.columns import IV_HI
 from ...dynamics.compiled_views import FOURIER, PIECEWISE
 from ...dynamics.implementations import use_fast
@@ -89,6 +90,9 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     exact = _exact_moments(view, wl, npi) if n_modes >= _CLOSED_FROM else None
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact
+    elif view is not None and view.kind == FOURIER and not view.ks.size:  # a constant load: its table
+        (mc,), (ms,) = _tabled_moments(view, s, wl.rate, np.array([float(t0)]), n_modes + 1)
+        (ca, cb), (sa, sb) = mc, ms
     elif view is not None:  # the compiled quadrature (the same panels)
         (mc,), (ms,) = _kernel_moments(tuple(view), s, wl.rate, [t0], wl.jumps, n_modes + 1)
         (ca, cb), (sa, sb) = mc, ms
@@ -165,10 +169,72 @@ def window_drives(s: float, R: float, n_modes: int, load, t0s) -> tuple[np.ndarr
         drives = [window_drive(s, R, n_modes, load, float(t)) for t in t0s]
         return (np.array([g for g, _ in drives]).reshape(t0s.size, n_modes + 1),
                 np.array([h for _, h in drives]).reshape(t0s.size, n_modes + 1))
-    view, rate = tuple(own.kernel.view), _window_rate(load, s)
-    mc, ms = _kernel_moments(view, s, rate, t0s, np.empty(0), n_modes + 1)
+    view, rate = own.kernel.view, _window_rate(load, s)
+    if view.kind == FOURIER and view.ks.size <= 1:  # one harmonic (the pneumatic load) or none: tabled
+        mc, ms = _tabled_moments(view, s, rate, t0s, n_modes + 1)
+    else:
+        mc, ms = _kernel_moments(tuple(view), s, rate, t0s, np.empty(0), n_modes + 1)
     (ca, cb), (sa, sb) = np.moveaxis(mc, 1, 0), np.moveaxis(ms, 1, 0)  # by the moments' order, start by start
     return _drive_parts(s, R, math.pi * np.arange(n_modes + 1), ca, cb, sa, sb)
+
+
+#: :func:`_node_table`'s tables by ``(s, rate, starts, M, k, p_k)``, read-only, the last 16
+_NODE_TABLES: dict = {}
+
+
+def _node_table(view, s: float, rate: float, t0s: np.ndarray, M: int):
+    """What the compiled quadrature of the window's moments (``_window._window_moments``, a load of
+    one harmonic or none, and no jumps) computes at its nodes apart from the mean load ``p0``: the
+    weights ``w``, shape ``(2, J)`` (rows: the halves ``[0, 1]``, ``[1, 2]``; ``J`` nodes each), the
+    harmonic ``a = Re(p_k e^{i k t})`` (``-0.0`` without a harmonic) at each start's nodes, shape
+    ``(P, 2, J)``, and ``cos, sin(n pi theta)`` by the kernel's rotation, shape ``(2, J, M)`` each;
+    the load there is ``p0 + a``. The same floats as the kernel's (the same operations in the same
+    order; ``math``'s ``cos``, ``sin`` are the C library's, as compiled code's). Kept per window,
+    starts and harmonic: a chart's load factors differ only in ``p0`` (theory §4b)."""
+    harmonic = (*view.ks.tolist(), *view.pr.tolist(), *view.pim.tolist())  # (k, Re p_k, Im p_k), or none
+    # (without a harmonic nothing depends on the starts but their number)
+    key = (float(s), float(rate), t0s.tobytes() if harmonic else t0s.size, M, harmonic)
+    table = _NODE_TABLES.get(key)
+    if table is not None:
+        return table
+    hq = 8.0 / (math.pi * (M - 1) + rate + 1.0)
+    npan = max(1, int(math.ceil(1.0 / hq)))  # (each half is one piece, of width 1: no jumps)
+    half_w = 0.5 * 1.0 / npan
+    gl_x, gl_w = _GL_X.tolist(), _GL_W.tolist()
+    ths, ws = [], []
+    for half in range(2):
+        for pnl in range(npan):
+            mid = float(half) + half_w * (2.0 * pnl + 1.0)
+            ths += [mid + half_w * x for x in gl_x]
+            ws += [half_w * w for w in gl_w]
+    J = len(gl_x) * npan
+    C, S = np.empty((2 * J, M)), np.empty((2 * J, M))
+    for j, th in enumerate(ths):
+        c1, s1 = math.cos(math.pi * th), math.sin(math.pi * th)
+        cn, sn = 1.0, 0.0
+        for n in range(M):
+            C[j, n], S[j, n] = cn, sn
+            cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
+    if harmonic:
+        k, pr, pim = harmonic
+        a = np.array([[pr * math.cos(k * t) - pim * math.sin(k * t) for t in (t0 + th / s for th in ths)]
+                      for t0 in t0s.tolist()])
+    else:  # a constant load: p0 + (-0.0) is p0, its zero's sign included
+        a = np.full((t0s.size, 2 * J), -0.0)
+    table = (np.array(ws).reshape(2, J), a.reshape(t0s.size, 2, J), C.reshape(2, J, M), S.reshape(2, J, M))
+    for x in table:
+        x.flags.writeable = False
+    return remember(_NODE_TABLES, key, table, 16)
+
+
+def _tabled_moments(view, s: float, rate: float, t0s: np.ndarray, M: int):
+    """:func:`_kernel_moments` for a load of one harmonic or none, without jumps, the same floats:
+    its nodes tabled once (:func:`_node_table`), each start's moments from them by one compiled call
+    (``_window.tabled_moments``) that adds each node's weighted load ``p0 + a`` in the kernel's order."""
+    w, a, c, sn = _node_table(view, s, rate, t0s, M)
+    mc, ms = np.zeros((t0s.size, 2, M)), np.zeros((t0s.size, 2, M))
+    KW.tabled_moments(float(view.p0), w, a, c, sn, mc, ms)
+    return mc, ms
 
 
 def _unit_moment(w):
