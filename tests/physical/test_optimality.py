@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -276,6 +277,29 @@ def test_the_polish_takes_a_search_s_design_to_a_certified_optimum():
     with pytest.raises(ValueError, match=r"^designs must be an integer >= 1"):
         polish(objective, margins, gradients, u, designs=0)
 
+
+def test_the_polish_runs_slsqp_on_one_blas_thread_whatever_the_caller_s():
+    """SLSQP's iterates differ in their last bits between one and two OpenBLAS threads (the documented
+    multistart's polish, replayed from its stored designs: its third iterate's pre-charge 0 against
+    1.1e-17, and a budget of 40 designs then ends on other designs, certified or not), and a process
+    that started a dask cluster before scipy loaded its OpenBLAS has one (distributed sets
+    OPENBLAS_NUM_THREADS=1 for its workers in the caller's environment). The polish takes one thread
+    itself: its callbacks see one BLAS thread under a caller's two, and the caller's two after it."""
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    from impactbar.physical.optimize_polish import polish
+
+    objective, margins, gradients, _ = _disc()
+    seen = []
+
+    def counted(v):  # (called by SLSQP alone; the objective and margins at the start before it too)
+        seen.extend(i["num_threads"] for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas")
+        return gradients(v)
+
+    with threadpoolctl.threadpool_limits(limits=2, user_api="blas"):
+        res = polish(objective, margins, counted, np.array([0.44, 0.89]), designs=30)
+        after = [i["num_threads"] for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"]
+    assert res.improved and seen and set(seen) == {1}
+    assert after and set(after) == {min(2, os.cpu_count() or 1)}
 
 def _documented_problem():
     """The page's six-variable problem (docs/optimising_a_drifter.md, the drilling rate held): the

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._shared.threads import single_threaded_blas
+
 __all__ = ["polish", "polish_search"]
 
 
@@ -116,8 +118,13 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
         return d_margins
 
     try:
-        res = minimize(f, u, jac=df, method="SLSQP", constraints=[{"type": "ineq", "fun": g, "jac": dg}],
-                       bounds=[(0.0, 1.0)] * u.size, options={"ftol": ftol, "maxiter": 10 * designs})
+        # SLSQP's arithmetic on one BLAS thread: its iterates' last bits depend on OpenBLAS's threads
+        # (1 where a dask cluster was started before scipy loaded its OpenBLAS, as distributed sets
+        # OPENBLAS_NUM_THREADS=1 for its workers in this process's environment; the cores otherwise),
+        # and a polish that ends at its budget lands on other designs from them
+        with single_threaded_blas():
+            res = minimize(f, u, jac=df, method="SLSQP", constraints=[{"type": "ineq", "fun": g, "jac": dg}],
+                           bounds=[(0.0, 1.0)] * u.size, options={"ftol": ftol, "maxiter": 10 * designs})
         message, success, nit = str(res.message), bool(res.success), int(res.nit)
     except _Spent:
         message, success, nit = f"the polish's limit reached ({designs} designs)", False, -1
