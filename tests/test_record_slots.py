@@ -94,7 +94,7 @@ NOT_RECORDS = {
     "laws/rodrock/exact.py": {"Zp", "Zr"},  # the last segment's impedance
     # c: a piece's coefficient array (a piecewise load's constant); the first piece, start and initial
     # wave; the rigid mode
-    "laws/rodrock/exactjac.py": {"c", "pieces", "qa", "starts", "waves"},
+    "laws/rodrock/exactjac.py": {"c", "pieces", "starts", "waves"},
     "laws/rodrock/exactmap.py": {"kappa", "qa"},  # the rigid mode's
     "laws/rodrock/law.py": {"qm"},  # the rigid mode
     "laws/rodrock/longrod.py": {"peaks", "qm"},  # the first boundary's (the shank's); the rigid mode

@@ -80,7 +80,7 @@ def test_the_arriving_waves_tangent_is_the_central_difference_of_the_blows(name)
     T0 = float(bmap.basis.travel[0])
     D = float(bmap.duration)
     ws, scale = EJ._primal(bmap, q, v)
-    _, _, on_stop = EJ._plus(bmap, ws, scale)
+    _, _, on_stop = bmap.after_run(ws, scale)
     # directions: the velocity of every mode and the first elastic mode's position where there is one
     dq = np.zeros((M + (M > 1), M))
     dv = np.zeros_like(dq)
@@ -140,7 +140,7 @@ def test_a_drive_direction_of_short_cubic_pieces_keeps_its_size():
             c[3] += 1e18
         direction.append((e, d, c))
     ws, scale = EJ._primal(bmap, q, v)
-    _, _, on_stop = EJ._plus(bmap, ws, scale)
+    _, _, on_stop = bmap.after_run(ws, scale)
     times = np.linspace(0.0, T0 + bmap.duration, 401)[1:-1]
     zero = np.zeros((1, q.size))
     along = (starts, [(e, d, c[None]) for e, d, c in direction])

@@ -136,7 +136,7 @@ def test_the_tangent_along_the_blows_own_data_is_the_blow():
         q, v = imp.q_before.copy(), imp.v_before.copy()
         q[0] -= float(bmap.basis.end_weights @ q)
         ws, scale = EJ._primal(bmap, q, v)
-        qa, va, on_stop = EJ._plus(bmap, ws, scale)
+        qa, va, on_stop = bmap.after_run(ws, scale)
         starts, pieces = bmap.drive
         drive = (starts, [(e, d, c[None]) for e, d, c in pieces])
         dq, dv, _ = EJ.tangents(bmap, ws, scale, initial_waves(bmap.basis, q[None], v[None],

@@ -97,7 +97,7 @@ def coupled_blow_tangent(model, drive, res, after, state, settings=None):
         primal = EJ._primal(bmap, q, v)
         if primal is None:
             return None
-        _, _, on_stop = EJ._plus(bmap, *primal)
+        _, _, on_stop = bmap.after_run(*primal)
     ws, scale = primal
     t0 = float(bmap.t0)
     et = make(res.pieces, res.events, state.mode, coupling.breaks, coupling.splines, coupling.impedance, t0)

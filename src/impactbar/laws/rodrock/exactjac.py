@@ -26,11 +26,9 @@ import numpy as np
 
 from . import _exacttangent as TG
 from ._records import (  # the records' slots and the pool's columns
-    BS_PPERM,
     CI_GIVEUP,
     CNT_PIECES,
     CNT_TERMS,
-    CT_T,
     END_COLS,
     END_GAP,
     END_PPERM,
@@ -39,8 +37,6 @@ from ._records import (  # the records' slots and the pool's columns
     ICH_TAIL,
     IMP_COLS,
     IMP_DIR,
-    NSF_GAP,
-    NSF_SHANK,
     PI_COUNT,
     PI_TERMS,
     PR_DRIVEN,
@@ -59,12 +55,9 @@ from ._records import (  # the records' slots and the pool's columns
     RD_HEAD,
     TCUR_N,
     TCUR_SIZE,
-    WS_BS,
     WS_CI,
     WS_CNT,
-    WS_CT,
     WS_LAM,
-    WS_NSF,
     WS_NSI,
     WS_PR,
     WS_RC,
@@ -129,22 +122,6 @@ def kept_primal(ws, scale, duration):
     light = (None,) * WS_CNT + tuple(x.copy() for x in ws[WS_CNT:])  # (the pool's arrays: before CNT)
     light[WS_PR][PR_TMAX] = duration  # (the tangent runs' horizon: the blow's end)
     return light, scale
-
-
-def _plus(bmap, ws, scale):
-    """The state after the primal blow (:meth:`ExactBlowMap.__call__`'s), and whether the end was put
-    back on the stop."""
-    from .exactmap import project
-
-    PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
-    NSF, BS = ws[WS_NSF], ws[WS_BS]
-    n_p = bmap.basis.travel.size
-    end = bmap._end(scale * NSF[n_p, NSF_SHANK], scale * NSF[n_p, NSF_GAP], scale * BS[BS_PPERM])
-    qa, va = project(bmap.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[WS_CT][CT_T]), end)
-    over = float(bmap.basis.end_weights @ qa)
-    if over > 0.0:
-        qa[0] -= over
-    return qa, va, over > 0.0
 
 
 def _bound(pieces, reach, spans=False):
@@ -392,7 +369,7 @@ def exact_impact_map(bmap, y_minus, t):
     if primal is None:
         return None
     ws, scale = primal
-    qa, va, on_stop = _plus(bmap, ws, scale)
+    qa, va, on_stop = bmap.after_run(ws, scale)
     y_plus = np.concatenate((qa, va))
     # the directions: q_1 .. q_N, q'_0 .. q'_N, and the impact time where the load's form is known
     K = 2 * M - 1

@@ -491,15 +491,16 @@ class ExactBlowMap:
         ``on_stop`` a third value: whether it was (the tangent's, :func:`~.exactjac.tangents`)."""
         end = self._end(ex.shank_displacement, ex.gap, ex.permanent_penetration)
         qa, va = project(self.basis, ex._hist, ex.duration, end)
-        over = float(self.basis.end_weights @ qa) > 0.0
-        qa = self._on_stop(qa)
+        qa, over = self._on_stop(qa)
         return (qa, va, over) if on_stop else (qa, va)
 
     def _on_stop(self, qa):
+        """``qa`` (the modal positions after a blow) with the end put on the stop where it is pressed
+        beyond it (in place), and whether it was."""
         over = float(self.basis.end_weights @ qa)
         if over > 0.0:
             qa[0] -= over
-        return qa
+        return qa, over > 0.0
 
     def __call__(self, y):
         """The state after the blow as one vector of shape ``(2 N + 2,)`` from the arrival state
@@ -510,12 +511,22 @@ class ExactBlowMap:
         q = np.array(y[:M], dtype=float)
         q[0] -= float(c @ q)
         ws, scale = self.solve(q, np.asarray(y[M:], dtype=float), lean=True)
+        qa, va, _ = self.after_run(ws, scale)
+        return np.concatenate((qa, va))
+
+    def after_run(self, ws, scale):
+        """The state after a lean run of the blow (:meth:`solve` with ``lean=True``: its workspace
+        ``ws`` and force scale ``scale``), as :meth:`__call__` and the tangents
+        (:mod:`~impactbar.laws.rodrock.exactjac`) take it: ``(qa, va, on_stop)``, the modal positions
+        from the next flight's stop (the end put on it where pressed beyond), shape ``(N + 1,)``, the
+        velocities, and whether the end was put on the stop."""
         PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
         NSF, BS = ws[WS_NSF], ws[WS_BS]
         n_p = self.basis.travel.size
         end = self._end(scale * NSF[n_p, NSF_SHANK], scale * NSF[n_p, NSF_GAP], scale * BS[BS_PPERM])
         qa, va = project(self.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[WS_CT][CT_T]), end)
-        return np.concatenate((self._on_stop(qa), va))
+        qa, on_stop = self._on_stop(qa)
+        return qa, va, on_stop
 
     def shifted(self, t0s):
         """Copies of this map at the load times ``t0s`` (the bases shared): the impact map's time
