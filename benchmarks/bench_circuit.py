@@ -15,11 +15,12 @@ own counters for it. Without ``--quick``, ``find_orbit`` with flexible pistons: 
 the way before; about four minutes). The goals on this 2-core machine: the rigid orbit
 <= 0.5 s, with 8 modes <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a
 few repetitions (the machine's other load only adds); compilation is done before the clock starts.
-Under the table, the example drill with all the parts (``examples/circuit_drill_parts.toml``, rigid
-piston) and the same drill with a spool valve (``examples/circuit_drill_spool.toml``): each orbit's CPU
-time against the preset's in the same run, the goal at most 3x: met or missed (``--drill``: those rows
-only; ``--drill --against REF`` beside those of the git ref ``REF``, or of a package tree's ``src``
-folder, each tree in fresh processes, ``--rounds`` each).
+Under the table, the example drill with all the parts a drifter has (``examples/circuit_drill_spool.toml``:
+the return line's accumulator, leakage, a cushion, a check valve and a pilot-operated spool valve; rigid
+piston) and the same drill with the preset's ramped valve (``examples/circuit_drill_parts.toml``): each
+orbit's CPU time against the preset's in the same run, the goal at most 3x: met or missed
+(``--drill``: those rows only; ``--drill --against REF`` beside those of the git ref ``REF``, or
+of a package tree's ``src`` folder, each tree in fresh processes, ``--rounds`` each).
 
 ``--goals REF`` instead runs, one after the other, the benchmarks that measure each goal of the
 elastic piston's circuit work against the git ref ``REF`` (e.g. ``main``), each in fresh processes
@@ -169,18 +170,19 @@ def integrators(d, drive):
     return t_cv, t_py, fl.piece.t.size, stats, t_ra, ref.t.size, calls[0], gap
 
 
-#: the example drill with all the parts a drifter has (a return accumulator, two clearances, a
-#: cushion, a check valve)
+#: the drill with the parts a drifter has (a return accumulator, two clearances, a cushion, a check
+#: valve) on the preset's ramped valve
 DRILL = Path(__file__).resolve().parents[1] / "examples" / "circuit_drill_parts.toml"
-#: the same drill with its main valve as a pilot-operated spool
+#: the example drill with all the parts: the same drill with its main valve a pilot-operated spool
 SPOOL_DRILL = DRILL.with_name("circuit_drill_spool.toml")
 #: the drill's rigid orbit at most this many times the preset's, same run
 DRILL_GOAL = 3.0
 
 
 def drill_rows(reps=3):
-    """CPU seconds of ``find_orbit`` from the default guess on the rigid preset, the example drill
-    (:data:`DRILL`) and the spool drill (:data:`SPOOL_DRILL`), the best of ``reps`` each after one
+    """CPU seconds of ``find_orbit`` from the default guess on the rigid preset, the drill on the
+    ramped valve (:data:`DRILL`) and the example drill with all the parts, its valve a spool
+    (:data:`SPOOL_DRILL`), the best of ``reps`` each after one
     call that compiles, and the drills' ratios to the preset's."""
     out = {}
     for name, d in (("preset", circuit_preset("circuit-drifter")), ("drill", load(DRILL)),
@@ -193,8 +195,8 @@ def drill_rows(reps=3):
 
 
 #: the drills' rows: (label, index in :func:`drill_rows`' numbers)
-DRILL_ROWS = (("rigid orbit CPU s, preset", 0), ("rigid orbit CPU s, example drill", 1),
-              ("rigid orbit CPU s, spool drill", 2), ("drill / preset rigid orbit (x)", 3),
+DRILL_ROWS = (("rigid orbit CPU s, preset", 0), ("rigid orbit CPU s, ramped-valve drill", 1),
+              ("rigid orbit CPU s, spool drill", 2), ("ramped-valve drill / preset (x)", 3),
               ("spool drill / preset rigid orbit (x)", 4))
 
 
@@ -283,7 +285,8 @@ WHY_DEFAULT_DISTANCE = (
     "contact_events='inside', the orbit is farther: 2.6e-3 on 8 cells)")
 
 WHY_DRILL = (
-    "the drill's circuit has two more nodes with a pressure state (the cushion's, the return line's), "
+    "(the same drill on the preset's ramped valve, beside the goal's spool drill) the drill's circuit "
+    "has two more nodes with a pressure state (the cushion's, the return line's), "
     "five more flows and six more events (the cushion's three kinks, the check valve's two, the return "
     "line's gas) than the preset's; each event crossed ends a flight and starts another")
 
@@ -308,10 +311,12 @@ GOALS = (
      (("rigid orbit", 0.5, ""), ("4 modes orbit", 0.2, ""), ("8 modes orbit", 0.5, ""),
       ("16 modes orbit", 2.0, ""), ("8 modes continuation point", 0.1, WHY_CONTINUATION),
       ("8 modes continuation, 8 points", 0.1, WHY_CONTINUATION))),
-    ("an orbit of the example drill (examples/circuit_drill_parts.toml, rigid piston) within 3x the "
-     "preset's rigid circuit orbit, same run", "bench_circuit.py", ("--drill", "--against", "{ref}"),
-     (("drill / preset rigid orbit (x)", DRILL_GOAL, WHY_DRILL),
-      ("spool drill / preset rigid orbit (x)", DRILL_GOAL, WHY_SPOOL))),
+    ("an orbit of the example drill with all the parts (examples/circuit_drill_spool.toml, rigid "
+     "piston) within 3x the preset's rigid circuit orbit, same run (beside it the same drill on the "
+     "preset's ramped valve, examples/circuit_drill_parts.toml)", "bench_circuit.py",
+     ("--drill", "--against", "{ref}"),
+     (("spool drill / preset rigid orbit (x)", DRILL_GOAL, WHY_SPOOL),
+      ("ramped-valve drill / preset (x)", DRILL_GOAL, WHY_DRILL))),
     ("the circuit on rock (examples/circuit_drifter_rock.toml) <= 0.3 s an orbit (CPU s)",
      "bench_circuit_laws.py", ("--against", "{ref}", "--rounds", "2"),
      (("find_orbit circuit", 0.3, ""),)),

@@ -1,7 +1,8 @@
-"""The map of the example drill (``examples/circuit_drill_parts.toml``) over its cushion's volume and
-full-open coefficient, 15 x 15 operating points on a local dask cluster (``impactbar.sweeps.run_map``,
-as ``impactbar sweep`` runs a design map), stored as ``docs/data/drill_cushion_map.csv`` for the
-tutorial page ``docs/drill_parts.md``, whose test recomputes a sample of its points from the config.
+"""The map of the drill on the preset's ramped valve (``examples/circuit_drill_parts.toml``) over its
+cushion's volume and full-open coefficient, 15 x 15 operating points on a local dask cluster
+(``impactbar.sweeps.run_map``, as ``impactbar sweep`` runs a design map), stored as
+``docs/data/drill_cushion_map.csv`` for the tutorial page ``docs/drill_parts.md``, whose test recomputes
+a sample of its points from the config.
 
 Run: ``python benchmarks/make_drill_cushion_map.py [--workers 2]`` (some minutes of CPU; it prints
 the map's CPU time: this process' and its finished children's, the dask workers, together).

@@ -140,7 +140,9 @@ print(res.table())
 # ``examples/circuit_drill_spool.toml`` is the same drill with a ``[parts.main_spool]`` of kind
 # ``spool_valve`` and no ``[valve]`` table: the spool's mass, stroke, end areas and control chamber
 # from a distributor spool's typical values (theory §11), its pilot ports where the drill's valve
-# switched. Its operating point, and the spool's position and control pressure over a period:
+# switched. With it the drill has every part a drifter has: it is the example drill whose rigid
+# orbit ``benchmarks/bench_circuit.py --drill`` times against the preset's (at most 3 times its CPU
+# time). Its operating point, and the spool's position and control pressure over a period:
 spool_drill = physical.load(ROOT / "examples" / "circuit_drill_spool.toml")
 spool_point = spool_drill.orbit()
 print(f"blow frequency {spool_point.blow_frequency_Hz:.2f} Hz, impact energy "

@@ -16,7 +16,6 @@
 import contextlib
 import io
 import runpy
-import time
 from pathlib import Path
 
 import numpy as np
@@ -26,20 +25,18 @@ ROOT = Path(__file__).resolve().parents[2]
 TUTORIALS = ROOT / "docs" / "tutorials_src"
 
 
-def _run(name: str) -> tuple[list[str], dict, float]:
-    """The tutorial's printed lines, its namespace and its wall time (s), its figures closed."""
+def _run(name: str) -> tuple[list[str], dict]:
+    """The tutorial's printed lines and its namespace, its figures closed."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     out = io.StringIO()
-    start = time.perf_counter()
     with contextlib.redirect_stdout(out):
         namespace = runpy.run_path(str(TUTORIALS / name), run_name="__main__")
-    seconds = time.perf_counter() - start
     plt.close("all")
-    return out.getvalue().splitlines(), namespace, seconds
+    return out.getvalue().splitlines(), namespace
 
 
 # --------------------------------------------------------------------------------------------------
@@ -121,12 +118,11 @@ def _kolsky_lines(report, t, dt) -> list[str]:
 
 
 def test_the_kolsky_tutorial_prints_what_the_spec_gives(kolsky, spec_report, raw):
-    """Every line the tutorial prints, rebuilt from ``run_spec`` on the example's spec; under 30 s."""
-    printed, namespace, seconds = kolsky
+    """Every line the tutorial prints, rebuilt from ``run_spec`` on the example's spec."""
+    printed, namespace = kolsky
     t, dt, *_ = raw
     assert printed == _kolsky_lines(spec_report, t, dt)
     assert namespace["report"] == spec_report
-    assert seconds < 30
 
 
 def test_the_kolsky_numbers_from_the_raw_file(spec_report, raw):
@@ -271,10 +267,9 @@ def _drill_lines(ch) -> list[str]:
 
 
 def test_the_drill_rod_tutorial_prints_what_its_chain_gives(drill, chain):
-    """Every line the tutorial prints, rebuilt from the chain repeated here; under 30 s."""
-    printed, _, seconds = drill
+    """Every line the tutorial prints, rebuilt from the chain repeated here."""
+    printed, _ = drill
     assert printed == _drill_lines(chain)
-    assert seconds < 30
 
 
 def test_the_drill_rods_waves_and_bit_against_the_blow(chain):

@@ -3,7 +3,6 @@ a one-line ``ValueError`` naming the parameter and its range, never another exce
 an answer that silently rounds the input."""
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -72,13 +71,11 @@ def test_a_rod_too_long_is_refused_before_its_grid_is_built():
     original = blow_module.blow_grid
     blow_module.blow_grid = lambda *a, **k: calls.append(a) or original(*a, **k)
     try:
-        start = time.perf_counter()
         with pytest.raises(ValueError, match="cell updates"):
             ib.single_blow(model, 1.0)
     finally:
         blow_module.blow_grid = original
     assert calls == []
-    assert time.perf_counter() - start < 60.0  # a guard against a hang, not a speed assertion
 
 
 @pytest.mark.parametrize("name", ["impedance", "wave_speed"])

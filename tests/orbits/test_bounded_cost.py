@@ -2,7 +2,6 @@
 refused before anything is allocated, absurd iteration counts are refused, and a wandering Newton
 stops on stagnation."""
 
-import time
 
 import numpy as np
 import pytest
@@ -14,10 +13,8 @@ from impactbar.orbits.multi_impact import MAX_UNKNOWNS, _Segments
 
 def test_problem_size_refused_before_allocating():
     model, load = BarModel(3.0, 0.1, 0.5, 4), CosineLoad(0.6, 1.0)
-    t0 = time.perf_counter()
     with pytest.raises(ValueError, match=r"40960 unknowns.*limited to 6000.*12\.5 GiB"):
         find_orbit(model, load, impacts=4096, periods=4096)  # tried to allocate 12.5 GiB
-    assert time.perf_counter() - t0 < 5.0
     # the bound is 2 (n_modes + 1) impacts: just inside it the problem is set up
     m = MAX_UNKNOWNS // (2 * 5)
     assert _Segments(model, load, m, m).size == 2 * 5 * m <= MAX_UNKNOWNS

@@ -1,6 +1,7 @@
-"""The example drill with its main valve as a pilot-operated spool (``examples/circuit_drill_spool.toml``):
-no ``[valve]`` table (the spool stands in for it), the cushion taking the spool's return port, its
-orbit's numbers (``impactbar drifter``'s, quoted in the tutorial) and two checks of them:
+"""The example drill with all the parts, its main valve a pilot-operated spool
+(``examples/circuit_drill_spool.toml``): no ``[valve]`` table (the spool stands in for it), the cushion
+taking the spool's return port, its orbit's numbers (``impactbar drifter``'s, quoted in the tutorial)
+and two checks of them:
 
 - the ramped valve plays no part: the drill's ``[valve]`` table added gives the same orbit, bit for bit;
 - the oil balance at the return line: over the periodic orbit the oil the cushion passes into it (all

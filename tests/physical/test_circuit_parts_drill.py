@@ -1,6 +1,7 @@
-"""The example drill with all the parts (``examples/circuit_drill_parts.toml``): its parts where the
-designer looks (``impactbar drifter``'s header lists them; the histories hold each part's node
-pressure and flow) and a return line fed by a cushion (its port ``"none"``).
+"""The drill with the parts a drifter has on the preset's ramped valve
+(``examples/circuit_drill_parts.toml``): its parts where the designer looks (``impactbar drifter``'s
+header lists them; the histories hold each part's node pressure and flow) and a return line fed by a
+cushion (its port ``"none"``).
 
 - Each part's flow in the histories against its law evaluated here on the histories' pressures and
   gap (a laminar leak's ``G dp``, an orifice's ``K phi(dp)``, the cushion's ``K g(y) phi(dp)`` with

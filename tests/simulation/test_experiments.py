@@ -120,9 +120,9 @@ def test_cli_experiment(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_batch_of_1000_rigid_runs_of_1000_impacts_under_10_s():
-    import time
-
+def test_batch_of_1000_rigid_runs_of_1000_impacts_from_two_threads():
+    """A thousand rigid runs of a thousand impacts each, two threads sharing the compiled event loop
+    (its speed: ``benchmarks/bench_simulate.py``): every run reaches its thousand impacts."""
     model = BarModel(s=1.0, d=0.0, R=0.8, n_modes=0)
     load = CosineLoad(1.2, 1.0)
     rng = np.random.default_rng(0)
@@ -132,15 +132,10 @@ def test_batch_of_1000_rigid_runs_of_1000_impacts_under_10_s():
               for _ in range(1000)]
     from concurrent.futures import ThreadPoolExecutor
 
-    simulate(model, load, starts[0], 1e6, t0=phi, max_impacts=10)  # compile outside the clock
-    t = time.perf_counter()
     with ThreadPoolExecutor(2) as pool:
         runs = list(pool.map(lambda st: simulate(model, load, st, 1e6, t0=phi, max_impacts=1000),
                              starts))
-    wall = time.perf_counter() - t
-    assert sum(r.n_impacts for r in runs) == 1000 * 1000
-    print(f"1000 x 1000 impacts in {wall:.2f} s")
-    assert wall < 10.0
+    assert all(r.n_impacts == 1000 for r in runs)
 
 
 def test_stick_impact_cycle_counts_one_main_impact_per_period():

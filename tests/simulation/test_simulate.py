@@ -3,7 +3,6 @@ closed-form rigid orbits (theory §4, §6), the bouncing-ball accumulation point
 fixed-free bar, and the energy balance."""
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -324,12 +323,9 @@ def test_stick_impact_release_cycle():
 
 
 def test_stick_impact_release_runs_thousands_of_periods():
-    start = time.perf_counter()
     tr = stick_cycle_run(3000)
-    wall = time.perf_counter() - start
     assert tr.status == "t_end" and tr.t_end == TWO_PI * 3000
     assert tr.contact_intervals.shape[0] >= 2990
-    assert wall < 120.0
 
 
 # ----------------------------------------------------------------------------------------------

@@ -3,7 +3,6 @@ the struck end still moving into the rod, the piston pushes a rod that acts on i
 impedance ``Z = s (1 + R)/(1 - R)`` until the interface force would turn tensile."""
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -117,15 +116,12 @@ def test_energy_account_closes(n_modes, R, d):
 
 def test_cost_does_not_grow_with_s():
     """A reported case: s = 1e6 over one load period, 850,000 windows before; now the same
-    few pieces at every s, and fast."""
+    few pieces at every s."""
     counts = []
     for s in (1e2, 1e4, 1e6):
         model = BarModel(s, 0.1, 0.0, 0, impact="wave")
-        start = time.perf_counter()
         tr = simulate(model, PRESS, InitialState.rigid(-0.5, 0.0), TWO_PI)
-        elapsed = time.perf_counter() - start
         counts.append((len(tr._segments), tr.n_impacts))
-        assert elapsed < 5.0
         assert tr.contact_intervals.shape == (1, 2)
     assert counts[0] == counts[1] == counts[2] == (3, 1)
 

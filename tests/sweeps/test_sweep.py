@@ -607,12 +607,10 @@ def test_cli_refuses_a_bad_spec_before_any_work(tmp_path):
     doc["model"]["R"] = 1.5
     spec_file = tmp_path / "bad.toml"
     spec_file.write_text(toml_text(doc))
-    t = time.perf_counter()
     res = cli("sweep", spec_file, "--out", tmp_path / "r.zarr", timeout=60)
     assert res.returncode == 2
     assert "[model] R must be in [0, 1]; got 1.5" in res.stderr
     assert not (tmp_path / "r.zarr").exists()
-    assert time.perf_counter() - t < 30
     res = cli("sweep", spec_file, "--out", tmp_path / "r.zarr", "--workers", "2", "--scheduler",
               "tcp://127.0.0.1:1", timeout=60)
     assert res.returncode == 2 and "not allowed with argument" in res.stderr

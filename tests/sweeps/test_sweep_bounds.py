@@ -1,7 +1,6 @@
 """A sweep spec whose extra dimension would make huge work chunks is refused when it is parsed,
 naming the key and the bound (``max_orbits = 1000000000`` once allocated 7.45 GiB)."""
 
-import time
 
 import pytest
 
@@ -24,12 +23,10 @@ def _doc(task="orbits", chunk_points=None, **opts):
 
 
 def test_huge_max_orbits_refused_before_allocating():
-    t0 = time.perf_counter()
     with pytest.raises(ValueError, match=r"\[orbits\] max_orbits = 1000000000: a work chunk of 1 grid "
                                          r"points would hold 1e\+09 values per variable \(7.45 GiB\); "
                                          r"the limit is 4194304 .*at most 2 one-impact orbits"):
         parse_spec(_doc(max_orbits=1_000_000_000))
-    assert time.perf_counter() - t0 < 1.0
 
 
 def test_an_integer_beyond_the_float_range_is_one_line():  # a fuzz campaign reproducer
