@@ -575,7 +575,8 @@ class CircuitDrifterOrbit(DrifterOrbit):
         relief's setting less the greatest supply pressure (below 0: the relief valve opens), and
         ``accumulator``, the least supply pressure less the pre-charge (below 0: the accumulator
         empties); a border the circuit does not have (no relief, no accumulator) is left out."""
-        return {k: float(v) * PRESSURE_SCALE for k, v in self.orbit.drive.border_tests(self._pieces).items()}
+        return {k: float(v) * PRESSURE_SCALE
+                for k, v in self.orbit.drive.border_tests(self._pieces, surfaces=False).items()}
 
     @property
     def pressures_at_impact_Pa(self) -> dict:

@@ -18,8 +18,9 @@ def continue_circuit(drifter: CircuitDrifter, parameter: str, to, *, step=None, 
                      max_points: int = 2000) -> CircuitBranch:
     """The drifter's operating point (:meth:`CircuitDrifter.orbit`) followed in one parameter of
     its circuit, with its folds, period doublings, Neimark-Sacker points and border collisions (the
-    accumulator emptying, the relief valve opening) located (:func:`~impactbar.continue_orbit`,
-    theory §5 and §11).
+    accumulator emptying, the relief valve opening, and a drill's parts': a check valve starting to
+    crack open, a cushion's kink passed, a spool reaching a stop or not) located
+    (:func:`~impactbar.continue_orbit`, theory §5 and §11).
 
     Parameters
     ----------

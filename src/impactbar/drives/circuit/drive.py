@@ -31,6 +31,7 @@ from .part_flows import part_flows
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 from .preset import preset_parts
 from .settings import DEFAULT_SETTINGS, ROOT_TOLERANCE, circuit_settings
+from .watch import border_tests as surface_tests
 from .watch import watched
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
@@ -617,14 +618,25 @@ class HydraulicCircuitDrive(Drive):
 
         return EndTangent(self, pieces, events, mode, breaks, splines, impedance, t0, _rate_model(1))
 
-    def border_tests(self, pieces) -> dict:
+    def border_tests(self, pieces, surfaces: bool = True) -> dict:
         """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the
         least supply pressure less the pre-charge (through 0 where the accumulator starts emptying
         during the cycle), and ``"relief"``, the relief pressure less the greatest supply pressure
         (through 0 where the relief valve starts opening); each extreme from the flights' cubic
         Hermite interpolants (the integrator's accuracy). A held supply has neither. Each watched
         event of an extra part the same way, by its name (its node's least pressure less an
-        accumulator's pre-charge, a relief's setting less the greatest).
+        accumulator's pre-charge, a relief's setting less the greatest). With ``surfaces``, the
+        extra parts' levels and spool stops too (:func:`.watch.border_tests`: a check valve
+        starting to crack open, a cushion's kink or a spool's port passed or not, a spool starting
+        or ceasing to reach its stop).
+
+        Parameters
+        ----------
+        pieces : list
+            The period's pieces (flights and blows).
+        surfaces : bool, optional
+            Whether to add the levels' and stops' tests (default ``True``; ``False``: the pressure
+            margins alone, in pressure units).
 
         Returns
         -------
@@ -638,18 +650,19 @@ class HydraulicCircuitDrive(Drive):
                 lo, hi = min(low for low, _ in ext), max(high for _, high in ext)
                 out[w.name] = lo - w.level if w.kind == NW.ACCUM else w.level - hi
         has_acc = acc is not None and acc.volume > 0 and not sup.held
-        if not (has_acc or (sup.has_relief and not sup.held)):
-            return out
-        lo, hi = math.inf, -math.inf
-        for p in pieces:
-            if not hasattr(p, "supply_extremes"):
-                continue
-            a, b = p.supply_extremes()
-            lo, hi = min(lo, a), max(hi, b)
-        if has_acc:
-            out[_ACC] = lo - acc.precharge
-        if sup.has_relief and not sup.held:
-            out[_REL] = sup.relief_pressure - hi
+        if has_acc or (sup.has_relief and not sup.held):
+            lo, hi = math.inf, -math.inf
+            for p in pieces:
+                if not hasattr(p, "supply_extremes"):
+                    continue
+                a, b = p.supply_extremes()
+                lo, hi = min(lo, a), max(hi, b)
+            if has_acc:
+                out[_ACC] = lo - acc.precharge
+            if sup.has_relief and not sup.held:
+                out[_REL] = sup.relief_pressure - hi
+        if surfaces:
+            out.update(surface_tests(self._watched, pieces))
         return out
 
     # -- results ----------------------------------------------------------------------------------

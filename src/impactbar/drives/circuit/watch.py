@@ -12,10 +12,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _network as NW
+from .extremes import hermite_extremes
 from .kinds import level as LV
 from .kinds import spool as SP
+from .kinds._flow import SOURCE, TARGET
 
-__all__ = ["Watch", "watched"]
+__all__ = ["Watch", "border_tests", "watched"]
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,13 @@ class Watch:
     quantity : callable
         ``quantity(q, z)``: the watched quantity at the modal displacements ``q`` and the circuit's
         state ``z``.
+    form : tuple
+        A level's quantity (a spool's: its position) as a linear form of the flight's columns,
+        ``(terms, offset)``, each term ``(space, index, coefficient)``: ``space`` ``"q"`` a modal
+        displacement, ``"z"`` a state of the circuit (:func:`border_tests`); ``()`` for a node's.
+    force : tuple
+        A spool's stop's: the oil's force on the spool, ``A_c p_c - A_0 p_s``, as such a form; else
+        ``()``.
     """
 
     name: str
@@ -46,6 +55,8 @@ class Watch:
     kind: int
     node: int | None
     quantity: Callable
+    form: tuple = ()
+    force: tuple = ()
 
     def flag(self, q, z) -> int:
         """The mode's flag at ``(q, z)``: at or above the level (above it for a relief)."""
@@ -68,6 +79,27 @@ def _stop(record, pressure, ns):
     return lambda q, z: SP.stop_quantity(float(z[ns]), ac * pressure(z, c) - a0 * pressure(z, s))
 
 
+def _pressure_form(nodes, ns, recs) -> tuple:
+    """``sum(sign p_node)`` over ``nodes`` (``(node, sign)`` pairs) as a linear form ``(terms,
+    offset)`` of the circuit's states: a node past the states held at its pressure."""
+    terms, offset = [], 0.0
+    for node, sign in nodes:
+        if node < ns:
+            terms.append(("z", node, sign))
+        else:
+            offset += sign * float(recs[node][NW.N_P])
+    return tuple(terms), offset
+
+
+def _level_form(record, ns, recs) -> tuple:
+    """A watched level's quantity (:func:`_level`) as a linear form of the flight's columns."""
+    if record[LV.GAP] == LV.SPOOL:
+        return (("z", ns, 1.0),), 0.0
+    if record[LV.GAP] > 0.5:
+        return (("q", 0, -1.0),), 0.0
+    return _pressure_form(((int(record[SOURCE]), 1.0), (int(record[TARGET]), -1.0)), ns, recs)
+
+
 def watched(net, events, own=()) -> tuple:
     """The extra parts' :class:`Watch` es of the composed network ``net`` (:func:`._network.compose`),
     in slot order; ``events`` the network's event names (slot ``i``:
@@ -85,14 +117,77 @@ def watched(net, events, own=()) -> tuple:
         if kind == NW.ACCUM and r[NW.A_WATCH] > 0.5 and r[NW.A_EV] >= 0:
             node = int(r[NW.A_NODE])
             out.append((int(r[NW.A_EV]), float(r[NW.A_P0]), kind, node,
-                        lambda q, z, j=node: pressure(z, j)))
+                        lambda q, z, j=node: pressure(z, j), (), ()))
         elif kind == NW.RELIEF and r[NW.R_WATCH] > 0.5 and r[NW.R_EV] >= 0:
             node = int(r[NW.R_FROM])
             out.append((int(r[NW.R_EV]), float(r[NW.R_SET]), kind, node,
-                        lambda q, z, j=node: pressure(z, j)))
+                        lambda q, z, j=node: pressure(z, j), (), ()))
         elif kind == NW.LEVEL and r[NW.LV_EV] >= 0:
-            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure, ns)))
+            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure, ns),
+                        _level_form(r, ns, recs), ()))
         elif kind == NW.SPOOL and r[SP.EVENT] >= 0:
-            out.append((int(r[SP.EVENT]), 0.0, kind, None, _stop(r.copy(), pressure, ns)))
-    watches = [Watch(events[slot], slot, level, kind, node, f) for slot, level, kind, node, f in out]
+            force = _pressure_form(((int(r[SP.CONTROL]), float(r[SP.LARGE])),
+                                    (int(r[SP.SUPPLY]), -float(r[SP.SMALL]))), ns, recs)
+            out.append((int(r[SP.EVENT]), 0.0, kind, None, _stop(r.copy(), pressure, ns),
+                        ((("z", ns, 1.0),), 0.0), force))
+    watches = [Watch(events[slot], slot, level, kind, node, f, form, force)
+               for slot, level, kind, node, f, form, force in out]
     return tuple(sorted((w for w in watches if w.name not in own), key=lambda w: w.slot))
+
+
+def _columns(piece, form) -> tuple:
+    """A linear form's columns of a flight piece's ``y`` and their coefficients."""
+    terms, _ = form
+    return [i if space == "q" else 2 * piece.M + i for space, i, _ in terms], np.array([c for *_, c in terms])
+
+
+def _values(piece, form) -> np.ndarray:
+    """A linear form's values over a flight piece's steps, shape ``(S,)``."""
+    (cols, c), (_, offset) = _columns(piece, form), form
+    return piece.y[:, cols] @ c + offset
+
+
+def _along(piece, form) -> tuple:
+    """A linear form's values and rates over a flight piece's steps, shapes ``(S,)``."""
+    cols, c = _columns(piece, form)
+    return _values(piece, form), piece.f[:, cols] @ c
+
+
+def border_tests(watches, pieces) -> dict:
+    r"""The border-collision tests of the watched levels and spool stops over a period's flights
+    (theory §11, *Parts of a drill's circuit*), each through 0 where the orbit's crossings of its
+    surface change: for a level (a check valve's cracking or full opening, a cushion's kink, a
+    spool's port) ``<name>.max`` and ``<name>.min``, the greatest and the least of its quantity over
+    the period less the level (from the flights' cubic Hermite interpolants, as the pressures'
+    extremes); for a spool's stop ``<name>.high`` and ``<name>.low``, at the stop of the full
+    stroke (:math:`x = 1`) and of none (:math:`x = 0`): the greatest force pushing the spool into
+    it while it rests there, else how far short of it the spool turns (:math:`\max x - 1`,
+    :math:`-\min x`), so that each passes 0 where the spool starts or stops reaching that stop.
+
+    Parameters
+    ----------
+    watches : tuple of Watch
+        The drive's (:func:`watched`); those of a node (accumulators, reliefs) are left out.
+    pieces : list
+        The period's pieces; those without a flight's steps (a blow's) are left out.
+
+    Returns
+    -------
+    dict of float
+        In the quantity's model units (a level's: a pressure, the gap or the spool's position as a
+        fraction of its stroke; a stop's: a force where the spool rests there, else its position),
+        only the sign and the zero of which a border collision reads. Empty without flights.
+    """
+    flights = [p for p in pieces if hasattr(p, "M") and hasattr(p, "f")]
+    out = {}
+    for w in watches if flights else ():
+        if w.kind == NW.LEVEL:
+            (lo,), (hi,) = hermite_extremes(((p.t, *_along(p, w.form)) for p in flights), 1)
+            out[f"{w.name}.max"], out[f"{w.name}.min"] = float(hi) - w.level, float(lo) - w.level
+        elif w.kind == NW.SPOOL:
+            x = np.concatenate([_values(p, w.form) for p in flights])
+            f = np.concatenate([_values(p, w.force) for p in flights])
+            high, low = x >= 1.0, x <= 0.0
+            out[f"{w.name}.high"] = float(f[high].max()) if high.any() else float(x.max()) - 1.0
+            out[f"{w.name}.low"] = float((-f[low]).max() if low.any() else -x.min())
+    return out

@@ -1,0 +1,109 @@
+"""The border collisions of a drill's parts (theory §11, *Parts of a drill's circuit*): each watched
+level (a check valve's cracking and full opening, a cushion's kinks, a spool's ports) and each
+spool's stop has border-collision tests, and continuation locates where the orbit's crossings of one
+change.
+
+- On the spool drill (``examples/circuit_drill_spool.toml``) each level's ``.max`` and ``.min`` are the
+  greatest and the least of the watched quantity less its level, checked against the watch's own
+  quantity (``Watch.quantity``, the events' Python twin) on a dense sampling of the period's flights;
+  each stop's ``.high`` and ``.low`` say the spool rests at both ends of its stroke, as its position
+  history does.
+- The check valve's tests read as its flow does: with its cracking pressure above every pressure
+  drop over the period its ``.max`` is below 0 and no oil passes it; at the example's it is above 0
+  and oil passes.
+- Continued in the valve's switch point, the drill on the ramped valve
+  (``examples/circuit_drill_parts.toml``) meets the cushion's last kink (45 mm): the piston's
+  greatest gap over the period, from fresh orbits' histories on either side, crosses the kink where
+  the branch's border collision says.
+"""
+
+import numpy as np
+import pytest
+
+from impactbar import physical
+from impactbar.continuation.driven import border_tests
+from impactbar.drives.circuit import _network as NW
+from impactbar.orbits import find_orbit
+
+pint = pytest.importorskip("pint")
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples"
+
+
+def _changed(path, values):
+    """The drifter of the config at ``path`` with ``values`` (dotted keys, SI quantities) set."""
+    return physical.build(physical.with_values(physical.read_config(str(path))[0], values))
+
+
+@pytest.fixture(scope="module")
+def spool_orbit():
+    d = physical.load(ROOT / "circuit_drill_spool.toml")
+    return find_orbit(d.model(), d.drive())
+
+
+def _dense(orbit, per_flight=400):
+    """The watched quantities' inputs ``(q, z)`` at ``per_flight`` points of each of the period's
+    flights (their cubic Hermite interpolants)."""
+    problem = orbit.problem
+    out = []
+    for p in problem.flights(problem.unknowns(orbit)):
+        Y = p._at(np.linspace(p.t0, p.t_end, per_flight))
+        nz = len(p.layout.state_names)
+        out.extend((Y[:p.M, i], Y[2 * p.M:2 * p.M + nz, i]) for i in range(Y.shape[1]))
+    return out
+
+
+def test_each_level_and_stop_has_its_tests_and_they_are_the_quantitys_extremes(spool_orbit):
+    tests = border_tests(spool_orbit)
+    watches = spool_orbit.drive._watched
+    samples = _dense(spool_orbit)
+    levels = [w for w in watches if w.kind == NW.LEVEL]
+    stops = [w for w in watches if w.kind == NW.SPOOL]
+    assert len(levels) == 11 and len(stops) == 1  # (the spool's 6, the cushion's 3, the check's 2)
+    for w in levels:
+        x = np.array([w.quantity(q, z) for q, z in samples])
+        span = x.max() - x.min()
+        assert tests[f"{w.name}.max"] == pytest.approx(x.max() - w.level, abs=1e-4 * span), w.name
+        assert tests[f"{w.name}.min"] == pytest.approx(x.min() - w.level, abs=1e-4 * span), w.name
+        assert tests[f"{w.name}.max"] >= x.max() - w.level - 1e-12 * span  # (the interpolants' own)
+    (stop,) = stops
+    x = np.array([z[stop.form[0][0][1]] for _, z in samples])  # (the spool's position)
+    g = np.array([stop.quantity(q, z) for q, z in samples])
+    assert abs(x.min()) < 1e-12 and abs(x.max() - 1.0) < 1e-12  # (it rests at both ends of its stroke)
+    for name, at in ((".high", x >= 1.0 - 1e-12), (".low", x <= 1e-12)):
+        assert tests[stop.name + name] > 0.0
+        assert tests[stop.name + name] == pytest.approx(g[at].max(), rel=1e-2)
+
+
+@pytest.mark.parametrize("crack, opens", [("0.05 MPa", True), ("0.5 MPa", False)])
+def test_the_check_valves_test_reads_as_its_flow(crack, opens):
+    point = _changed(ROOT / "circuit_drill_parts.toml", {"parts.check.cracking_pressure": crack}).orbit()
+    flow = point.histories(4000)["q_check_m3_s"]
+    test = border_tests(point.orbit)["check_crack.max"]
+    assert (test > 0.0) == opens
+    assert (np.abs(flow).max() > 0.0) == opens
+
+
+@pytest.fixture(scope="module")
+def cushion_branch():
+    d = physical.load(ROOT / "circuit_drill_parts.toml")
+    return d, physical.continue_circuit(d, "valve.switch_out", "18 mm")
+
+
+def test_continuation_locates_where_the_piston_stops_reaching_the_cushions_last_kink(cushion_branch):
+    d, branch = cushion_branch
+    (event,) = [e for e in branch.branch.events if e.surface == "cushion_kink2.max"]
+    assert abs(border_tests(event.orbit)["cushion_kink2.max"]) < 1e-8
+    (si,) = [e for e in branch.events if e["kind"] == "border-collision cushion_kink2.max"]
+    at_mm = si["value"] * 1e3  # (the drifter's branch says it in the key's SI unit, m)
+    assert at_mm == pytest.approx(20.72, abs=0.005)  # (theory §11 quotes it)
+    # the greatest gap over the period from fresh orbits on either side
+    kink, sides = 45e-3, []
+    for factor in (0.99, 1.01):
+        point = _changed(ROOT / "circuit_drill_parts.toml",
+                         {"valve.switch_out": f"{at_mm * factor} mm"}).orbit()
+        sides.append((at_mm * factor, point.histories(20000)["gap_m"].max() - kink))
+    (s0, g0), (s1, g1) = sides
+    assert g0 < 0.0 < g1  # (a later switch, a longer return stroke)
+    crossing = s0 - g0 * (s1 - s0) / (g1 - g0)
+    assert crossing == pytest.approx(at_mm, rel=1e-3)
