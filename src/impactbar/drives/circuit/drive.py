@@ -372,6 +372,37 @@ class HydraulicCircuitDrive(Drive):
 
     # -- the Drive interface ----------------------------------------------------------------------
     def start(self, model, q, v) -> DriveState:
+        return self._start(model, q, v)
+
+    def charged_start(self, model, q, v) -> DriveState | None:
+        """The start from rest of :meth:`start` with the supply and the front chamber charged to the
+        relief valve's setting rather than left at the pre-charge: where the pump delivers more than
+        the drill takes (the spool drill's 70 L/min), the orbit's supply pressure lies just above that
+        setting, else below it, the motion from there discharging toward it by the supply's slow
+        multiplier (theory §11, *The integrator*: a start for the motion followed to Newton's start,
+        :func:`impactbar.orbits._closing.settle_start`). Where the motion from rest charges the
+        supply impact by impact, some 5 % an impact on the spool drill, this start is nearer.
+
+        Parameters
+        ----------
+        model : BarModel
+        q, v : numpy.ndarray
+            The piston's modal displacements and velocities at rest on the stop (m, m/s; scaled).
+
+        Returns
+        -------
+        DriveState or None
+            ``None`` where :meth:`start` takes the user's ``start_pressures``, the supply is held or
+            has no relief valve, or its setting is below the pre-charge.
+        """
+        sup, acc = self.supply, self.accumulator
+        precharge = acc.precharge if acc is not None and acc.volume > 0 else sup.tank_pressure
+        if self.start_pressures is not None or sup.held or not sup.has_relief \
+                or sup.relief_pressure < max(precharge, sup.tank_pressure):
+            return None
+        return self._start(model, q, v, sup.relief_pressure)
+
+    def _start(self, model, q, v, charged=None) -> DriveState:
         sup, acc = self.supply, self.accumulator
         xv, L = None, self.layout
         if self.start_pressures is not None:  # (in the layout's order, the spool's opening optional)
@@ -382,6 +413,8 @@ class HydraulicCircuitDrive(Drive):
         else:
             if sup.held:
                 ps = sup.pressure
+            elif charged is not None:  # (charged_start's: the relief valve's setting)
+                ps = charged
             elif acc is not None and acc.volume > 0:
                 ps = max(acc.precharge, sup.tank_pressure)
             else:
