@@ -27,7 +27,7 @@ from ..drives.orbitproblem import at_rounding_floor, step_size
 
 __all__ = ["SETTLE_HANDOVER", "SETTLE_LIFTED", "SETTLE_RTOL", "CLOSING_HANDOVER", "LIFTED_HANDOVER",
            "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "ROOT_HANDOVER", "LOOSE_FIRST",
-           "ROOT_SETTLE_RTOL", "STEER_PHI_ATOL", "close", "settle_start",
+           "ROOT_SETTLE_RTOL", "STEER_PHI_ATOL", "close", "settle_start", "least_impacts",
            "LOOSE_CURVATURE", "loose_contraction", "checked_root", "root_settings", "settle_handover",
            "loose_settings", "settle_settings", "steer_settings", "first_residual"]
 
@@ -180,6 +180,30 @@ def settle_start(problem, q, v):
         if state is not None:
             return state
     return problem.drive.start(problem.model, q, v)
+
+
+def least_impacts(problem, m: int) -> int:
+    """How many impacts of the motion followed to a start of ``problem`` (``m`` impacts a period) must
+    be passed before their velocities' agreement may hand it over: ``2 m + 2``, or ``2 m + 1`` where
+    the chord's plain flights are the orbit's root's (:func:`root_settings`), the motion followed from
+    the drive's charged start (:func:`settle_start`) and the chord's first step taking the steering
+    flight's residual: on the spool drill (``examples/circuit_drill_spool.toml``) the fourth impact's
+    velocity agrees with the third's to 4.3e-5, the fifth's with the fourth's to 7.9e-6, and handed
+    over at the fourth the chord's first step is 1.6e-5 where it was 1.5e-6, its steps as many (one
+    plain period at the root's tolerance) and the orbit 1.5e-10 from one at ``rtol = 1e-12`` (1.0e-10
+    at the fifth; ``benchmarks/HISTORY.md``).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    m : int
+        Impacts a period.
+
+    Returns
+    -------
+    int
+    """
+    return 2 * m + (1 if root_settings(problem) is not None else 2)
 
 
 def loose_settings(settings):

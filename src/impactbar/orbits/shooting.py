@@ -389,7 +389,7 @@ class ShootingProblem(OrbitProblem):
             if speeds[-1] <= 0.0:
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
                                  "without one) does not strike the stop: give a guess")
-            if n_max > m and len(speeds) > 2 * m + 2 and \
+            if n_max > m and len(speeds) > C.least_impacts(self, m) and \
                     abs(speeds[-1] - speeds[-1 - m]) <= agree * max(1.0, abs(speeds[-1])):
                 ahead = y + DRIFT_AHEAD * (y - hist[-1 - m].y)  # (where the drift takes it next)
                 if not (self.variational and (drifting(hist[-1 - 2 * m].y, hist[-1 - m].y, y, settle)
