@@ -58,8 +58,8 @@ def test_the_spool_drill_hands_over_two_impacts_sooner_and_flies_one_fine_period
     period at the root's tolerance (29 flights), where the way before (the hand-over at
     ``SETTLE_HANDOVER``, the chord's first residual a flight of its own: measured 10 impacts and 58
     flights on main) flew more. The two orbits within the root's tolerance (1e-9 of the unknowns;
-    measured 1.7e-11, and 2.8e-10 in the multipliers), each as near an orbit at ``rtol = 1e-12``
-    (measured 1.3e-10 and 1.1e-10)."""
+    measured 2.4e-11, and 6.7e-11 in the multipliers; from rest 1.7e-11 and 2.8e-10), each as near an
+    orbit at ``rtol = 1e-12`` (measured 1.5e-10 and 1.2e-10; from rest 1.3e-10 and 1.1e-10)."""
     model, drive = spool
     orbit, impacts, fine = _counted(monkeypatch, model, drive)
     assert impacts <= 8
