@@ -66,6 +66,12 @@ class OwnFlight:
         whose root is the orbit itself, as accurate as the variational flights' state, so that the
         chord's root needs no closing step by a variational flight (theory §11, *The integrator*);
         ``None`` (default), or a ``None`` returned: the orbit is the variational flights' root.
+    charged_start : callable or None, optional
+        ``charged_start(model, q, v) -> DriveState or None``: a state of the drive nearer the orbit
+        than its ``start`` from rest (the oil circuit's supply charged to its relief valve's
+        setting), from which the periodic orbits whose chord's root is ``root_settings``' follow the
+        motion to Newton's start (:func:`impactbar.orbits._closing.settle_start`); ``None`` (default),
+        or a ``None`` returned: ``start``.
     """
 
     fly: Callable[..., Any]
@@ -73,6 +79,7 @@ class OwnFlight:
     state_settings: Callable[..., Any] | None = None
     carried: Callable[..., Any] | None = None
     root_settings: Callable[..., Any] | None = None
+    charged_start: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True)

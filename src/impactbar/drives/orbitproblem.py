@@ -225,7 +225,7 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
 
 
 def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None, first_value=None,
-          handover: float = 0.0, first_here: bool = False) -> np.ndarray:
+          handover: float = 0.0, first_here: bool = False, first_bound=None) -> np.ndarray:
     """The chord method (a simplified Newton's method) on ``value(X) -> r`` from ``X``: every step
     with one Jacobian, ``first`` (``jacobian(X)`` where not given) factorised once, the residuals by
     ``value`` alone; the Jacobian taken again (``jacobian``, at the iterate) only where the steps stop
@@ -240,15 +240,20 @@ def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None, f
     gave ``first``: no flight more). With ``handover > 0``, a Newton step (its Jacobian taken at its
     own start) of relative size at most ``handover`` ends the iteration: the iterate's error is then
     of order the step's square, and the caller finishes with a Newton step of its own instead of
-    the chord's steps. Raises as :func:`newton` does, its stall test (:data:`STALL_STEPS`) counting
-    its Newton steps alone (:class:`StalledIteration`: Newton's method from its start circles).
+    the chord's steps. ``first_bound``, where ``first_value`` is a looser flight's residual: the
+    second step (the first from ``value``) then measures that residual's error rather than the
+    chord's contraction, which ``first_bound(s1)`` bounds after a first step of size ``s1`` (the
+    Jacobian's own error and its change over that step); that step ends the iteration where the
+    bound times its size is below ``tol``. Raises as :func:`newton` does, its stall test
+    (:data:`STALL_STEPS`) counting its Newton steps alone (:class:`StalledIteration`: Newton's method
+    from its start circles).
     """
     import scipy.linalg as sl
 
     hi, lo = positive, np.setdiff1d(np.arange(np.size(X)), positive)
     Jac, lu, last, step = (jacobian(X) if first is None else first), None, math.inf, np.zeros(0)
     fresh = first is None or first_here
-    r = first_value
+    r, bound = first_value, None  # (bound: the contraction's after a looser first residual's step)
     stalled = _Stall()
     for _ in range(max_iter):
         if lu is None:
@@ -259,8 +264,10 @@ def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None, f
             if np.any(np.diag(lu[0]) == 0.0):
                 raise ValueError(_SINGULAR)
         step = sl.lu_solve(lu, -(value(X) if r is None else r), check_finite=False)
-        r = None
+        loose, r = r is not None and first_bound is not None, None
         X, size, done, damped = _advance(X, step, hi, lo, Jac, tol, last, 0.25)
+        done = done or (bound is not None and not damped and bound * size <= tol)
+        bound = first_bound(size) if loose and not damped else None
         if done or (fresh and size <= handover):
             return X
         if fresh and at_rounding_floor(size, last):  # the rounding floor, reached (as newton's)

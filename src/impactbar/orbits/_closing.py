@@ -27,7 +27,8 @@ from ..drives.orbitproblem import at_rounding_floor, step_size
 
 __all__ = ["SETTLE_HANDOVER", "SETTLE_LIFTED", "SETTLE_RTOL", "CLOSING_HANDOVER", "LIFTED_HANDOVER",
            "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "ROOT_HANDOVER", "LOOSE_FIRST",
-           "ROOT_SETTLE_RTOL", "STEER_PHI_ATOL", "close", "checked_root", "root_settings", "settle_handover",
+           "ROOT_SETTLE_RTOL", "STEER_PHI_ATOL", "close", "settle_start", "least_impacts",
+           "LOOSE_CURVATURE", "loose_contraction", "checked_root", "root_settings", "settle_handover",
            "loose_settings", "settle_settings", "steer_settings", "first_residual"]
 
 #: How closely the impact velocities of the motion followed to a start agree, impact after impact,
@@ -98,6 +99,14 @@ ROOT_SETTLE_RTOL = 1e-5
 #: chord's steps as many (one plain period at the root's tolerance) and its orbit as near one at
 #: ``rtol = 1e-12`` (1.4e-10 of the unknowns; ``benchmarks/HISTORY.md``).
 STEER_PHI_ATOL = 1e-5
+#: How much the chord's contraction grows with its first step's size (relative, as Newton's steps
+#: are measured) where that step took the steering flight's residual and the plain flights are the
+#: orbit's root's (:func:`loose_contraction`): the Jacobian, taken at the start, is then some
+#: ``LOOSE_CURVATURE * s1`` off the one at the first iterate. On the spool drill
+#: (``examples/circuit_drill_spool.toml``, and at 40 and 50 L/min of pump flow, from rest and from the
+#: relief valve's setting) the third step over the second was 1.1e-5 to 1.9e-2, 0.3 to 18 times the
+#: first step's size (``benchmarks/HISTORY.md``); a five-fold margin.
+LOOSE_CURVATURE = 100.0
 
 _UNSET = object()
 
@@ -144,6 +153,57 @@ def settle_handover(problem, default: float) -> float:
     float
     """
     return ROOT_HANDOVER if root_settings(problem) is not None else default
+
+
+def settle_start(problem, q, v):
+    """The drive's state from which the motion of ``problem`` is followed to Newton's start without a
+    guess, the piston at rest on the stop (``q``, ``v``): where the chord's plain flights are the
+    orbit's root's (:func:`root_settings`), the drive's ``OwnFlight.charged_start`` where it gives one
+    (the oil circuit's supply at its relief valve's setting: on the spool drill,
+    ``examples/circuit_drill_spool.toml``, 5 impacts followed where 8 were from the pre-charge, 4 of
+    them charging the supply before its drift was carried to the relief's setting), else the drive's
+    ``start``.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    q, v : numpy.ndarray, shape (M,)
+        The piston's modal displacements and velocities (scaled).
+
+    Returns
+    -------
+    DriveState
+    """
+    own = problem.drive.abilities.flight
+    if root_settings(problem) is not None and own.charged_start is not None:
+        state = own.charged_start(problem.model, q, v)
+        if state is not None:
+            return state
+    return problem.drive.start(problem.model, q, v)
+
+
+def least_impacts(problem, m: int) -> int:
+    """How many impacts of the motion followed to a start of ``problem`` (``m`` impacts a period) must
+    be passed before their velocities' agreement may hand it over: ``2 m + 2``, or ``2 m + 1`` where
+    the chord's plain flights are the orbit's root's (:func:`root_settings`), the motion followed from
+    the drive's charged start (:func:`settle_start`) and the chord's first step taking the steering
+    flight's residual: on the spool drill (``examples/circuit_drill_spool.toml``) the fourth impact's
+    velocity agrees with the third's to 4.3e-5, the fifth's with the fourth's to 7.9e-6, and handed
+    over at the fourth the chord's first step is 1.6e-5 where it was 1.5e-6, its steps as many (one
+    plain period at the root's tolerance) and the orbit 1.5e-10 from one at ``rtol = 1e-12`` (1.0e-10
+    at the fifth; ``benchmarks/HISTORY.md``).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    m : int
+        Impacts a period.
+
+    Returns
+    -------
+    int
+    """
+    return 2 * m + (1 if root_settings(problem) is not None else 2)
 
 
 def loose_settings(settings):
@@ -237,6 +297,31 @@ def first_residual(problem, X, steer, r):
     own = plain is not None and dataclasses.replace(plain, magnus_theta=None) == \
         dataclasses.replace(problem.settings, magnus_theta=None)
     return r if own else None
+
+
+def loose_contraction(problem):
+    """A bound on the chord's contraction after a first step of size ``s1`` that took the steering
+    flight's residual (:func:`first_residual`), where the plain flights are the orbit's root's
+    (:func:`root_settings`): ``STEER_ERROR + LOOSE_CURVATURE * s1``, the steering Jacobian's own
+    error (:data:`STEER_ERROR`) and its change over that step (:data:`LOOSE_CURVATURE`). The chord's
+    second step, its first from the root's flights, measures that residual's error (some 2e-7 on the
+    spool drill, whatever the start), not the contraction; the bound times it predicts the third
+    (:func:`~impactbar.drives.orbitproblem.chord`'s ``first_bound``). ``None`` elsewhere.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+
+    Returns
+    -------
+    callable or None
+        ``bound(s1) -> float`` (dimensionless), or ``None``.
+    """
+    return _contraction if root_settings(problem) is not None else None
+
+
+def _contraction(size: float) -> float:
+    return STEER_ERROR + LOOSE_CURVATURE * size
 
 
 _SINGULAR = "find_orbit: the Jacobian of the periodic-orbit problem is singular at its root"

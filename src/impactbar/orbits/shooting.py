@@ -338,7 +338,7 @@ class ShootingProblem(OrbitProblem):
             return self._settle(tau, mode, y, SETTLE_LIFTED if self.variational else SETTLE_IMPACTS)
         if guess is None:
             q, v = np.zeros(M), np.zeros(M)
-            state = drive.start(model, q, v)
+            state = C.settle_start(self, q, v)  # (the drive's start, or one nearer the orbit)
             return self._settle(0.0, state.mode, np.concatenate((q, v, state.z)), SETTLE_IMPACTS)
         if hasattr(guess, "final_state") and hasattr(guess, "switch_kinds"):  # a run under the drive
             fin = guess.final_state
@@ -389,7 +389,7 @@ class ShootingProblem(OrbitProblem):
             if speeds[-1] <= 0.0:
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
                                  "without one) does not strike the stop: give a guess")
-            if n_max > m and len(speeds) > 2 * m + 2 and \
+            if n_max > m and len(speeds) > C.least_impacts(self, m) and \
                     abs(speeds[-1] - speeds[-1 - m]) <= agree * max(1.0, abs(speeds[-1])):
                 ahead = y + DRIFT_AHEAD * (y - hist[-1 - m].y)  # (where the drift takes it next)
                 if not (self.variational and (drifting(hist[-1 - 2 * m].y, hist[-1 - m].y, y, settle)
@@ -579,7 +579,8 @@ class ShootingProblem(OrbitProblem):
             return used[0]
 
         return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first,
-                     first_value=first_value, handover=handover, first_here=first_here), used[0]
+                     first_value=first_value, handover=handover, first_here=first_here,
+                     first_bound=None if first_value is None else C.loose_contraction(self)), used[0]
 
     def _close(self, X, last, tol: float = 0.0):
         """:meth:`solve`'s closing step from the plain flights' root ``X``, ``last`` the chord's last

@@ -48,6 +48,7 @@ def circuit_abilities(drive) -> DriveAbilities:
     return DriveAbilities(
         flight=OwnFlight(drive.flight, variational=drive.variational,
                          state_settings=drive.variational_state_settings, carried=drive.carries,
-                         root_settings=drive.root_settings),
+                         root_settings=drive.root_settings,
+                         charged_start=drive.charged_start),
         quadratures=Quadratures(drive.n_quadratures, drive.quadratures, drive.piston_work_quadrature),
         end_flight=drive.end_flight, end_tangent=drive.end_tangent, border_tests=drive.border_tests)

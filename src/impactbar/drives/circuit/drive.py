@@ -31,8 +31,10 @@ from .part_flows import part_flows
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 from .preset import preset_parts
 from .settings import DEFAULT_SETTINGS, ROOT_TOLERANCE, circuit_settings
+from .watch import ACC as _ACC
+from .watch import REL as _REL
 from .watch import border_tests as surface_tests
-from .watch import watched
+from .watch import pressure_margins, watched
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
 
@@ -46,8 +48,6 @@ _RANGES = {p.name: p.ranges for p in DECLARED}
 _SWITCH_OUT = "switch_out"
 _SWITCH_IN = "switch_in"
 _RAMP = "ramp_end"
-_ACC = "accumulator"
-_REL = "relief"
 #: the events the drive reads itself (the others an extra part's, :func:`.watch.watched`)
 _OWN_EVENTS = (_RAMP, _ACC, _REL)
 #: the most (mode, slots) keys whose fired events a drive keeps (:meth:`HydraulicCircuitDrive._fired`)
@@ -373,6 +373,37 @@ class HydraulicCircuitDrive(Drive):
 
     # -- the Drive interface ----------------------------------------------------------------------
     def start(self, model, q, v) -> DriveState:
+        return self._start(model, q, v)
+
+    def charged_start(self, model, q, v) -> DriveState | None:
+        """The start from rest of :meth:`start` with the supply and the front chamber charged to the
+        relief valve's setting rather than left at the pre-charge: where the pump delivers more than
+        the drill takes (the spool drill's 70 L/min), the orbit's supply pressure lies just above that
+        setting, else below it, the motion from there discharging toward it by the supply's slow
+        multiplier (theory §11, *The integrator*: a start for the motion followed to Newton's start,
+        :func:`impactbar.orbits._closing.settle_start`). Where the motion from rest charges the
+        supply impact by impact, some 5 % an impact on the spool drill, this start is nearer.
+
+        Parameters
+        ----------
+        model : BarModel
+        q, v : numpy.ndarray
+            The piston's modal displacements and velocities at rest on the stop (m, m/s; scaled).
+
+        Returns
+        -------
+        DriveState or None
+            ``None`` where :meth:`start` takes the user's ``start_pressures``, the supply is held or
+            has no relief valve, or its setting is below the pre-charge.
+        """
+        sup, acc = self.supply, self.accumulator
+        precharge = acc.precharge if acc is not None and acc.volume > 0 else sup.tank_pressure
+        if self.start_pressures is not None or sup.held or not sup.has_relief \
+                or sup.relief_pressure < max(precharge, sup.tank_pressure):
+            return None
+        return self._start(model, q, v, sup.relief_pressure)
+
+    def _start(self, model, q, v, charged=None) -> DriveState:
         sup, acc = self.supply, self.accumulator
         xv, L = None, self.layout
         if self.start_pressures is not None:  # (in the layout's order, the spool's opening optional)
@@ -383,6 +414,8 @@ class HydraulicCircuitDrive(Drive):
         else:
             if sup.held:
                 ps = sup.pressure
+            elif charged is not None:  # (charged_start's: the relief valve's setting)
+                ps = charged
             elif acc is not None and acc.volume > 0:
                 ps = max(acc.precharge, sup.tank_pressure)
             else:
@@ -642,25 +675,7 @@ class HydraulicCircuitDrive(Drive):
         -------
         dict of float
         """
-        sup, acc = self.supply, self.accumulator
-        out: dict = {}
-        for w in self._watched:
-            ext = [p.extremes(w.node) for p in pieces if hasattr(p, "extremes") and w.node is not None]
-            if ext:
-                lo, hi = min(low for low, _ in ext), max(high for _, high in ext)
-                out[w.name] = lo - w.level if w.kind == NW.ACCUM else w.level - hi
-        has_acc = acc is not None and acc.volume > 0 and not sup.held
-        if has_acc or (sup.has_relief and not sup.held):
-            lo, hi = math.inf, -math.inf
-            for p in pieces:
-                if not hasattr(p, "supply_extremes"):
-                    continue
-                a, b = p.supply_extremes()
-                lo, hi = min(lo, a), max(hi, b)
-            if has_acc:
-                out[_ACC] = lo - acc.precharge
-            if sup.has_relief and not sup.held:
-                out[_REL] = sup.relief_pressure - hi
+        out = pressure_margins(self, pieces)
         if surfaces:
             out.update(surface_tests(self._watched, pieces))
         return out

@@ -6,6 +6,7 @@ check valve's kinks) or the spool's position (a spool valve's ports' kinks), and
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -17,7 +18,10 @@ from .kinds import level as LV
 from .kinds import spool as SP
 from .kinds._flow import SOURCE, TARGET
 
-__all__ = ["Watch", "border_tests", "watched"]
+__all__ = ["Watch", "border_tests", "pressure_margins", "watched"]
+
+#: the preset's accumulator's and relief's event and border names
+ACC, REL = "accumulator", "relief"
 
 
 @dataclass(frozen=True)
@@ -190,4 +194,43 @@ def border_tests(watches, pieces) -> dict:
             high, low = x >= 1.0, x <= 0.0
             out[f"{w.name}.high"] = float(f[high].max()) if high.any() else float(x.max()) - 1.0
             out[f"{w.name}.low"] = float((-f[low]).max() if low.any() else -x.min())
+    return out
+
+
+def pressure_margins(drive, pieces) -> dict:
+    """The circuit's pressure margins over a period (:meth:`.HydraulicCircuitDrive.border_tests`
+    without its levels and stops): each watched node's (an extra part's accumulator: its least
+    pressure less the pre-charge; a relief: its setting less the greatest), then the preset's
+    ``"accumulator"`` and ``"relief"`` on the supply's extremes (theory §11).
+
+    Parameters
+    ----------
+    drive : HydraulicCircuitDrive
+    pieces : list
+        The period's pieces (those without a flight's extremes left out).
+
+    Returns
+    -------
+    dict of float
+        In model pressure units.
+    """
+    sup, acc = drive.supply, drive.accumulator
+    out: dict = {}
+    for w in drive._watched:
+        ext = [p.extremes(w.node) for p in pieces if hasattr(p, "extremes") and w.node is not None]
+        if ext:
+            lo, hi = min(low for low, _ in ext), max(high for _, high in ext)
+            out[w.name] = lo - w.level if w.kind == NW.ACCUM else w.level - hi
+    has_acc = acc is not None and acc.volume > 0 and not sup.held
+    if has_acc or (sup.has_relief and not sup.held):
+        lo, hi = math.inf, -math.inf
+        for p in pieces:
+            if not hasattr(p, "supply_extremes"):
+                continue
+            a, b = p.supply_extremes()
+            lo, hi = min(lo, a), max(hi, b)
+        if has_acc:
+            out[ACC] = lo - acc.precharge
+        if sup.has_relief and not sup.held:
+            out[REL] = sup.relief_pressure - hi
     return out
