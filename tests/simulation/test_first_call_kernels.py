@@ -9,10 +9,12 @@ import subprocess
 import sys
 from collections import Counter
 
-_RIGID = """
+import pytest
+
+#: a child's preamble: ``compiled`` lists each numba compile's function, in order
+_COUNT = """
 import json
 from numba.core import event
-from impactbar import BarModel, CosineLoad, InitialState, simulate
 
 compiled = []
 
@@ -27,9 +29,25 @@ class Count(event.Listener):
 
 
 event.register("numba:compile", Count())
+"""
+
+_RIGID = _COUNT + """
+from impactbar import BarModel, CosineLoad, InitialState, simulate
+
 simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0), 30.0)
 print(json.dumps(compiled))
 """
+
+
+def _first_call(script, tmp_path):
+    """The last line of ``script``'s output, read as JSON, run in a fresh process with the empty numba
+    cache ``tmp_path``."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), NUMBA_CACHE_DIR=str(tmp_path),
+               OMP_NUM_THREADS="1", IMPACTBAR_TIERED="0")
+    env.pop("NUMBA_DISABLE_JIT", None)
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
+                          check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def test_a_rigid_simulate_compiles_each_kernel_once_and_no_more_than_15d5b20(tmp_path):
@@ -37,12 +55,47 @@ def test_a_rigid_simulate_compiles_each_kernel_once_and_no_more_than_15d5b20(tmp
     signature, 32 compiles in all (numba's own helpers included) as in release 15d5b20: the crossing
     search's scratch rows are C arrays, as the arrays Python passes it, not the 'A' arrays of an
     unpacked block that made the search and six flight kernels compile twice (39 compiles)."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), NUMBA_CACHE_DIR=str(tmp_path),
-               OMP_NUM_THREADS="1")
-    env.pop("NUMBA_DISABLE_JIT", None)
-    done = subprocess.run([sys.executable, "-c", _RIGID], env=env, capture_output=True, text=True,
-                          check=True)
-    compiled = json.loads(done.stdout.strip().splitlines()[-1])
+    compiled = _first_call(_RIGID, tmp_path)
     twice = {k: n for k, n in Counter(compiled).items() if k.startswith("impactbar.") and n > 1}
     assert twice == {}
     assert 20 <= len(compiled) <= 32
+
+
+#: the README's first exact blow and a bit with mass on two segments (complex exponents): ``records``
+_BLOWS = """
+from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
+
+law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
+first = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
+mass = RodRock(segments=[RodSegment(2.0, 1.0), RodSegment(1.0, 0.6)], rock=BilinearRock(1.0, 5.0),
+               bit_mass=0.3)
+second = single_blow(BarModel(s=1.0, d=0.0, R=0.0, n_modes=0, impact=mass), 1.0)
+records = [[b.junction_forces.tobytes().hex(), b.bit_forces.tobytes().hex(), b.penetrations.tobytes().hex()]
+           for b in (first, second)]
+"""
+
+
+@pytest.mark.slow
+def test_the_first_exact_blow_compiles_each_kernel_once_and_samples_its_record_interpreted(tmp_path):
+    """The README's first exact blow (and a second one, a bit with mass on two segments: complex
+    exponents), with an empty numba cache: each of impactbar's kernels compiles for one signature,
+    and the record's history evaluators (``eval_histories``, ``eval_bit`` and their callee
+    ``_eval_into``, some 1 s of compiling) not at all: their interpreted twins sample the histories,
+    to the machine code's bits (compared here with the machine code of this process)."""
+    from impactbar.dynamics import _tiers
+
+    out = _first_call(_COUNT + _BLOWS + "print(json.dumps({'compiled': compiled, 'records': records}))",
+                      tmp_path)
+    twice = {k: n for k, n in Counter(out["compiled"]).items() if k.startswith("impactbar.") and n > 1}
+    assert twice == {}
+    history = [k for k in out["compiled"] if k.startswith("impactbar.laws.rodrock._exacthistory.")]
+    assert history == []  # (on f29151a3: eval_histories, eval_bit, _eval_into)
+    assert len(out["compiled"]) <= 80  # (88 on f29151a3)
+    eager = _tiers._PROCESS.eager
+    _tiers._PROCESS.eager = True  # here: the machine code
+    here = {}
+    try:
+        exec(_BLOWS, here)
+    finally:
+        _tiers._PROCESS.eager = eager
+    assert out["records"] == here["records"]
