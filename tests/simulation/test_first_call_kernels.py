@@ -9,10 +9,11 @@ import subprocess
 import sys
 from collections import Counter
 
-_RIGID = """
+#: a fresh process's compiles, by kernel (numba's compile events); the script after it prints them
+_LISTEN = """
 import json
+import numpy as np
 from numba.core import event
-from impactbar import BarModel, CosineLoad, InitialState, simulate
 
 compiled = []
 
@@ -27,9 +28,24 @@ class Count(event.Listener):
 
 
 event.register("numba:compile", Count())
+"""
+
+_RIGID = _LISTEN + """
+from impactbar import BarModel, CosineLoad, InitialState, simulate
+
 simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0), 30.0)
 print(json.dumps(compiled))
 """
+
+
+def _fresh(script, tmp_path):
+    """What ``script`` prints last (JSON), run in a fresh process with an empty numba cache."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), NUMBA_CACHE_DIR=str(tmp_path),
+               OMP_NUM_THREADS="1")
+    env.pop("NUMBA_DISABLE_JIT", None)
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
+                          check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def test_a_rigid_simulate_compiles_each_kernel_once_and_no_more_than_15d5b20(tmp_path):
@@ -37,12 +53,33 @@ def test_a_rigid_simulate_compiles_each_kernel_once_and_no_more_than_15d5b20(tmp
     signature, 32 compiles in all (numba's own helpers included) as in release 15d5b20: the crossing
     search's scratch rows are C arrays, as the arrays Python passes it, not the 'A' arrays of an
     unpacked block that made the search and six flight kernels compile twice (39 compiles)."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), NUMBA_CACHE_DIR=str(tmp_path),
-               OMP_NUM_THREADS="1")
-    env.pop("NUMBA_DISABLE_JIT", None)
-    done = subprocess.run([sys.executable, "-c", _RIGID], env=env, capture_output=True, text=True,
-                          check=True)
-    compiled = json.loads(done.stdout.strip().splitlines()[-1])
+    compiled = _fresh(_RIGID, tmp_path)
     twice = {k: n for k, n in Counter(compiled).items() if k.startswith("impactbar.") and n > 1}
     assert twice == {}
     assert 20 <= len(compiled) <= 32
+
+
+_CIRCUIT_HELPERS = _LISTEN + """
+from impactbar.drives.circuit import _sundials
+if _sundials.bind():
+    from impactbar.drives.circuit import _cvode  # noqa: F401  (its C callbacks compile at import)
+from impactbar.drives.circuit._dop853 import keep_row
+T, Y = keep_row(np.zeros(2), np.ones((2, 3)), 2, 5.0, np.arange(4.0))  # (full: doubled)
+print(json.dumps([compiled, T.tolist(), Y.tolist()]))
+"""
+
+
+def test_the_circuits_flight_helpers_compile_once_and_without_a_shape_error_message(tmp_path):
+    """The oil circuit's flight helpers (CVODE's block solve behind its C callback, the kept rows'
+    growth that the explicit and CVODE's flights share) compile one signature each and copy arrays
+    element by element: numba's slice assignment compiles, per caller's options and per dimension, a
+    shape-mismatch message built from strings (``raise_with_shape_context`` and numba's string
+    routines: 89 of the 178 compiles of the circuit's first ``orbit()`` before); the block solve's
+    plain flight passed a constant and compiled a second time. The rows are the same (kept, doubled,
+    the new one set)."""
+    compiled, T, Y = _fresh(_CIRCUIT_HELPERS, tmp_path)
+    assert [k for k in compiled if "shape_context" in k or "unicode" in k] == []
+    assert {k: n for k, n in Counter(compiled).items() if k.startswith("impactbar.") and n > 1} == {}
+    assert "impactbar.drives.circuit._dop853.keep_row" in compiled
+    assert len(T) == len(Y) == 4 and T[:3] == [0.0, 0.0, 5.0]
+    assert Y[:3] == [[1.0] * 3, [1.0] * 3, [0.0, 1.0, 2.0]]

@@ -21,7 +21,9 @@ one is then found where CVODE would find it), located on the step's 7th-order de
 The driver calls the vector field and the event functions of a network's generated module, so its
 source is compiled with that module (:mod:`._netgen`: numba caches a function only where the
 functions it calls are its module's globals); :func:`compile_driver` compiles it, uncached, on any
-other vector field (the tests' closed forms). This module holds what the driver calls.
+other vector field (the tests' closed forms). This module holds what the driver calls. Arrays are
+copied element by element in these kernels: numba's slice assignment compiles its shape-mismatch
+message (string routines) for each caller's options.
 """
 
 from __future__ import annotations
@@ -184,11 +186,13 @@ def mark_roots(glo, ghi, active, directions, roots):
 @nb.njit(**_JIT)
 def keep_row(T, Y, k, t, y):
     """``(T, Y)`` with row ``k`` set to ``t`` and ``y[:keep]``, doubled where full."""
-    if k == T.size:
+    if k == T.size:  # (element by element: a slice assignment compiles numba's shape-error message)
         T2 = np.empty(2 * T.size)
         Y2 = np.empty((2 * T.size, Y.shape[1]))
-        T2[:k] = T
-        Y2[:k] = Y
+        for r in range(k):
+            T2[r] = T[r]
+            for i in range(Y.shape[1]):
+                Y2[r, i] = Y[r, i]
         T, Y = T2, Y2
     T[k] = t
     for i in range(Y.shape[1]):
@@ -358,8 +362,10 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
                 counts[3] += 1
             else:
                 t_hi = t_new
-                ys[:] = y_new
-                ghi[:] = gend
+                for i in range(N):
+                    ys[i] = y_new[i]
+                for i in range(E):
+                    ghi[i] = gend[i]
             imax, zero = DP.crossing(glo, ghi, active, directions)
             if imax >= 0 or zero:  # CVODE's Illinois search on (tlo, t_hi]
                 moved = False
@@ -380,13 +386,15 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
                     imid, zmid = DP.crossing(glo, gmid, active, directions)
                     if imid >= 0 or zmid:
                         t_hi = tmid
-                        ghi[:] = gmid
+                        for i in range(E):
+                            ghi[i] = gmid[i]
                         moved = True
                         side = 1
                         imax = imid
                         continue
                     tlo = tmid
-                    glo[:] = gmid
+                    for i in range(E):
+                        glo[i] = gmid[i]
                     side = 2
                 DP.mark_roots(glo, ghi, active, directions, roots)
                 if moved:
@@ -399,13 +407,16 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
             for i in range(E):
                 if not active[i] and ghi[i] != 0.0:
                     active[i] = True
-            glo[:] = ghi
+            for i in range(E):
+                glo[i] = ghi[i]
             tlo = t_hi
         if flag == DP.DOP853_ROOT:
-            y[:] = ys
+            for i in range(N):
+                y[i] = ys[i]
             break
         y, y_new = y_new, y
-        K[0] = K[12]
+        for i in range(N):
+            K[0, i] = K[12, i]
         t = t_new
         if t_new == t_end:
             flag = DP.DOP853_TSTOP
