@@ -207,25 +207,55 @@ def _sum(coefficients) -> str:
     return " + ".join(terms) if terms else "0.0"
 
 
-def _stages(first: int, last: int, indent: str, end_into: str | None = None) -> str:
+def _stage_table():
+    """Each stage's nonzero coefficients ``A[s, j]`` (``j < s``), in ``j``'s order: ``(row, col,
+    coef)``, stage ``s``'s at ``row[s]`` to ``row[s + 1]`` of ``col`` and ``coef``."""
+    row, col, coef = [0, 0], [], []
+    for s in range(1, N_EXTENDED):
+        js = [j for j in range(s) if A[s, j] != 0.0]
+        if not js:  # (scipy's tableau has none; the loop below starts each sum with a term)
+            raise ValueError(f"DOP853's stage {s} has no nonzero coefficient")
+        col += js
+        coef += [float(A[s, j]) for j in js]
+        row.append(len(col))
+    return np.array(row, np.int64), np.array(col, np.int64), np.array(coef)
+
+
+#: the stages' coefficients as :func:`_stage_table` lists them (the driver's stage loop)
+STAGE_ROW, STAGE_COL, STAGE_COEF = _stage_table()
+
+
+def _stages(first: int, last: int, indent: str) -> str:
     """The stages ``first`` to ``last - 1`` (``ys = y + h sum_j A[s, j] K[j]``, then its rate into
-    ``K[s]``), each written out with its coefficients; with ``end_into``, stage ``last`` (the
-    solution's weights, ``A[12] = B``) into that array and its rate."""
-    out = []
-    for s in range(first, last + (end_into is not None)):
-        into = end_into if s == last else "ys"
-        out += ["for i in range(N):",
-                f"    {into}[i] = y[i] + ({_sum(A[s, :s])}) * h",
-                f"flight_rhs(t + {float(C[s])!r} * h, {into}, K[{s}], par)"]
-    return "\n".join(indent + line for line in out)
+    ``K[s]``; stage :data:`N_STAGES`, the solution's weights ``A[12] = B``, into ``y_new``) as one
+    loop over the stages with one call of the vector field: each component's sum taken term by term
+    in ``j``'s order over the nonzero coefficients (scipy's ``np.dot``'s terms, as the sum written out
+    with its literals took them, the same numbers), each term over all components at once."""
+    lines = [f"for s in range({first}, {last}):",
+             "    into = y_new if s == DP.N_STAGES else ys",
+             "    p = DP.STAGE_ROW[s]",
+             "    j = DP.STAGE_COL[p]",
+             "    c = DP.STAGE_COEF[p]",
+             "    for i in range(N):",
+             "        into[i] = K[j, i] * c",
+             "    for p in range(DP.STAGE_ROW[s] + 1, DP.STAGE_ROW[s + 1]):",
+             "        j = DP.STAGE_COL[p]",
+             "        c = DP.STAGE_COEF[p]",
+             "        for i in range(N):",
+             "            into[i] = into[i] + K[j, i] * c",
+             "    for i in range(N):",
+             "        into[i] = y[i] + into[i] * h",
+             "    flight_rhs(t + DP.C[s] * h, into, K[s], par)"]
+    return "\n".join(indent + line for line in lines)
 
 
 def _source() -> str:
-    """The driver's source (:data:`SOURCE`): the stages, the error norm and the dense output's
-    coefficients written out with scipy's coefficients."""
+    """The driver's source (:data:`SOURCE`): the error norm and the dense output's coefficients
+    written out with scipy's coefficients, the stages as one loop each (:func:`_stages`: one call of
+    the vector field in each, where the 15 stages written out made 15 to compile)."""
     dense = "\n".join(f"        F[{3 + r}, i] = ({_sum(D[r])}) * h" for r in range(N_DENSE - 3))
     return (_SOURCE.replace("@E5@", _sum(E5)).replace("@E3@", _sum(E3)).replace("@DENSE@", dense)
-            .replace("@STEP@", _stages(1, N_STAGES, " " * 12, "y_new"))
+            .replace("@STEP@", _stages(1, N_STAGES + 1, " " * 12))
             .replace("@EXTRA@", _stages(N_STAGES + 1, N_EXTENDED, " " * 12)))
 
 
