@@ -200,9 +200,7 @@ WIDER_NOT_RECORDS = {
     # series' last
     "drives/base.py": {"q", "v"},
     "drives/circuit/_bar.py": {"y"},  # y: a state vector's components ([0] the rigid mode)
-    # T: a time grid's first and last; Y: rows of states: the first and last; callbacks: the first
-    # callback
-    "drives/circuit/_cvode.py": {"T", "Y", "callbacks"},
+    "drives/circuit/_cvode.py": {"callbacks"},  # callbacks: the first callback
     # W: a stack of like matrices, each named where taken; c: a coefficient array's entries; q: the
     # modal coordinates: [0] the rigid mode
     "drives/circuit/_magnus.py": {"W", "c", "q"},

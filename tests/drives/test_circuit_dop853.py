@@ -216,3 +216,39 @@ def test_a_circuit_flight_takes_scipys_steps_to_cvodes_event(stroke):
     n = cvode.q.size
     assert np.max(np.abs(y_end[2 * n:2 * n + cvode.z.size] - cvode.z) / (np.abs(cvode.z) + 1e-3)) < 1e-8
     assert np.max(np.abs(y_end[:n] - cvode.q)) < 1e-8
+
+
+def _written_out(first, last, indent):
+    """The stages ``first`` to ``last - 1`` written out term by term with scipy's coefficients (stage
+    12, the solution's weights, into ``y_new``): the straight-line form of the driver's stage loop."""
+    out = []
+    for s in range(first, last):
+        terms = " + ".join(f"K[{j}, i] * {float(DP.A[s, j])!r}" for j in range(s) if DP.A[s, j] != 0.0)
+        into = "y_new" if s == DP.N_STAGES else "ys"
+        out += ["for i in range(N):", f"    {into}[i] = y[i] + ({terms}) * h",
+                f"flight_rhs(t + {float(DP.C[s])!r} * h, {into}, K[{s}], par)"]
+    return "\n".join(indent + line for line in out)
+
+
+def test_the_stage_loop_is_the_written_out_stages_to_the_bit(oscillator, monkeypatch):
+    """The driver's stages, one loop over the stages (one call of the vector field to compile, not
+    15), give the numbers of the stages written out with their coefficients, to the bit: each sum
+    taken term by term in the same order over the same nonzero coefficients, on long flights with and
+    without dense samples and on one that ends at an event."""
+    source = (DP._SOURCE.replace("@E5@", DP._sum(DP.E5)).replace("@E3@", DP._sum(DP.E3))
+              .replace("@DENSE@", "\n".join(f"        F[{3 + r}, i] = ({DP._sum(DP.D[r])}) * h"
+                                            for r in range(DP.N_DENSE - 3)))
+              .replace("@STEP@", _written_out(1, DP.N_STAGES + 1, " " * 12))
+              .replace("@EXTRA@", _written_out(DP.N_STAGES + 1, DP.N_EXTENDED, " " * 12)))
+    assert source != DP.SOURCE
+    monkeypatch.setattr(DP, "SOURCE", source)
+    written = DP.compile_driver(_rhs, _events)
+    cases = [([1.0, 0.0], 40.0, 1e-10, (10.0, 10.0), 0.0), ([1.0, 0.0], 40.0, 1e-12, (10.0, 10.0), 0.05),
+             ([0.3, -2.0], 30.0, 1e-9, (-0.5, 10.0), 0.02)]
+    for y0, t_end, rtol, levels, spacing in cases:
+        par = np.array([W2, DAMP, *levels])
+        a = _fly(oscillator, y0, t_end, rtol, par, spacing=spacing)
+        b = _fly(written, y0, t_end, rtol, par, spacing=spacing)
+        assert a[0] == b[0] and a[5][0] > 5
+        for x, z in zip(a[1:], b[1:], strict=True):
+            assert x.dtype == z.dtype and x.tobytes() == z.tobytes()

@@ -14,6 +14,7 @@ import pytest
 #: a child's preamble: ``compiled`` lists each numba compile's function, in order
 _COUNT = """
 import json
+import numpy as np
 from numba.core import event
 
 compiled = []
@@ -99,3 +100,29 @@ def test_the_first_exact_blow_compiles_each_kernel_once_and_samples_its_record_i
     finally:
         _tiers._PROCESS.eager = eager
     assert out["records"] == here["records"]
+
+
+_CIRCUIT_HELPERS = _COUNT + """
+from impactbar.drives.circuit import _sundials
+if _sundials.bind():
+    from impactbar.drives.circuit import _cvode  # noqa: F401  (its C callbacks compile at import)
+from impactbar.drives.circuit._dop853 import keep_row
+T, Y = keep_row(np.zeros(2), np.ones((2, 3)), 2, 5.0, np.arange(4.0))  # (full: doubled)
+print(json.dumps([compiled, T.tolist(), Y.tolist()]))
+"""
+
+
+def test_the_circuits_flight_helpers_compile_once_and_without_a_shape_error_message(tmp_path):
+    """The oil circuit's flight helpers (CVODE's block solve behind its C callback, the kept rows'
+    growth that the explicit and CVODE's flights share) compile one signature each and copy arrays
+    element by element: numba's slice assignment compiles, per caller's options and per dimension, a
+    shape-mismatch message built from strings (``raise_with_shape_context`` and numba's string
+    routines: 89 of the 178 compiles of the circuit's first ``orbit()`` before); the block solve's
+    plain flight passed a constant and compiled a second time. The rows are the same (kept, doubled,
+    the new one set)."""
+    compiled, T, Y = _first_call(_CIRCUIT_HELPERS, tmp_path)
+    assert [k for k in compiled if "shape_context" in k or "unicode" in k] == []
+    assert {k: n for k, n in Counter(compiled).items() if k.startswith("impactbar.") and n > 1} == {}
+    assert "impactbar.drives.circuit._dop853.keep_row" in compiled
+    assert len(T) == len(Y) == 4 and T[:3] == [0.0, 0.0, 5.0]
+    assert Y[:3] == [[1.0] * 3, [1.0] * 3, [0.0, 1.0, 2.0]]

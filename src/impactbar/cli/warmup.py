@@ -30,7 +30,7 @@ KERNELS = {
     "rod and rock orbits, exact blows": 16,
     "rod and rock orbits, lattice": 24,
     "rigid sweep chunks": 27,
-    "oil circuit": 172,
+    "oil circuit": 82,
     "oil circuit on rod and rock": 24,
     "piston optimiser": 11,
 }

@@ -28,6 +28,7 @@ from numba import types
 
 from ...dynamics.compiled import CACHE
 from . import _sundials as S
+from ._dop853 import keep_row
 
 if not S.bind():  # pragma: no cover - imported only where available (flight.py)
     raise ImportError(f"CVODE cannot be driven from compiled code here: {S.reason()}")
@@ -191,11 +192,11 @@ def _block_solve_c(S, A, x, b, tol):
     n = (_band_ml(A) & _LOW32) + 1
     data = nb.carray(_band_data(A), N * ldim)
     xx = nb.carray(_nv_data(x), N)
-    xx[:] = nb.carray(_nv_data(b), N)
-    if (_band_mu(A) & _LOW32) >= n:
-        _block_solve(data, n, ldim, smu, xx, N - n, 1)
-    else:
-        _block_solve(data, n, ldim, smu, xx, N - n - n * n, n + 1)
+    bb = nb.carray(_nv_data(b), N)
+    for i in range(N):
+        xx[i] = bb[i]
+    plain = (_band_mu(A) & _LOW32) >= n
+    _block_solve(data, n, ldim, smu, xx, N - n if plain else N - n - n * n, 1 if plain else n + 1)
     return 0
 
 
@@ -230,7 +231,8 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
         CVODE's root information at a root (nonzero where an event function crossed), else 0.
     """
     y = nb.carray(_nv_data(yvec), y0.size)
-    y[:] = y0
+    for i in range(y0.size):
+        y[i] = y0[i]
     flag = _reinit(mem, t0, yvec)
     if flag == 0:
         flag = _tolerances(mem, rtol, atol)
@@ -246,7 +248,8 @@ def fly_split(mem, yvec, t0, y0, t_end, rtol, atol, split, atol_after, atol_vec,
     arguments and returns otherwise :func:`fly`'s."""
     N = y0.size
     y = nb.carray(_nv_data(yvec), N)
-    y[:] = y0
+    for i in range(N):
+        y[i] = y0[i]
     weights = nb.carray(_nv_data(atol_vec), N)
     weights[:split] = atol
     weights[split:] = atol_after
@@ -268,26 +271,14 @@ def _steps(mem, yvec, flag, t0, y0, t_end, directions, par, keep, max_steps):
         flag = _root_direction(mem, directions.ctypes.data)
     if flag == 0:
         flag = _stop_time(mem, t_end)
-    cap = 512
-    T = np.empty(cap)
-    Y = np.empty((cap, keep))
-    T[0] = t0
-    Y[0] = y0[:keep]
+    T, Y = keep_row(np.empty(512), np.empty((512, keep)), 0, t0, y0)
     k = 1
     tret = np.zeros(1)
     while flag >= 0:
         flag = _step(mem, t_end, yvec, tret.ctypes.data, CV_ONE_STEP)
         if flag < 0:
             break
-        if k == cap:
-            cap *= 2
-            T2 = np.empty(cap)
-            Y2 = np.empty((cap, keep))
-            T2[:k] = T[:k]
-            Y2[:k] = Y[:k]
-            T, Y = T2, Y2
-        T[k] = tret[0]
-        Y[k] = y[:keep]
+        T, Y = keep_row(T, Y, k, tret[0], y)
         k += 1
         if flag == CV_ROOT_RETURN:
             _root_info(mem, roots.ctypes.data)

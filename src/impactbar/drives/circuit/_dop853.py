@@ -21,7 +21,9 @@ one is then found where CVODE would find it), located on the step's 7th-order de
 The driver calls the vector field and the event functions of a network's generated module, so its
 source is compiled with that module (:mod:`._netgen`: numba caches a function only where the
 functions it calls are its module's globals); :func:`compile_driver` compiles it, uncached, on any
-other vector field (the tests' closed forms). This module holds what the driver calls.
+other vector field (the tests' closed forms). This module holds what the driver calls. Arrays are
+copied element by element in these kernels: numba's slice assignment compiles its shape-mismatch
+message (string routines) for each caller's options.
 """
 
 from __future__ import annotations
@@ -184,11 +186,13 @@ def mark_roots(glo, ghi, active, directions, roots):
 @nb.njit(**_JIT)
 def keep_row(T, Y, k, t, y):
     """``(T, Y)`` with row ``k`` set to ``t`` and ``y[:keep]``, doubled where full."""
-    if k == T.size:
+    if k == T.size:  # (element by element: a slice assignment compiles numba's shape-error message)
         T2 = np.empty(2 * T.size)
         Y2 = np.empty((2 * T.size, Y.shape[1]))
-        T2[:k] = T
-        Y2[:k] = Y
+        for r in range(k):
+            T2[r] = T[r]
+            for i in range(Y.shape[1]):
+                Y2[r, i] = Y[r, i]
         T, Y = T2, Y2
     T[k] = t
     for i in range(Y.shape[1]):
@@ -203,25 +207,55 @@ def _sum(coefficients) -> str:
     return " + ".join(terms) if terms else "0.0"
 
 
-def _stages(first: int, last: int, indent: str, end_into: str | None = None) -> str:
+def _stage_table():
+    """Each stage's nonzero coefficients ``A[s, j]`` (``j < s``), in ``j``'s order: ``(row, col,
+    coef)``, stage ``s``'s at ``row[s]`` to ``row[s + 1]`` of ``col`` and ``coef``."""
+    row, col, coef = [0, 0], [], []
+    for s in range(1, N_EXTENDED):
+        js = [j for j in range(s) if A[s, j] != 0.0]
+        if not js:  # (scipy's tableau has none; the loop below starts each sum with a term)
+            raise ValueError(f"DOP853's stage {s} has no nonzero coefficient")
+        col += js
+        coef += [float(A[s, j]) for j in js]
+        row.append(len(col))
+    return np.array(row, np.int64), np.array(col, np.int64), np.array(coef)
+
+
+#: the stages' coefficients as :func:`_stage_table` lists them (the driver's stage loop)
+STAGE_ROW, STAGE_COL, STAGE_COEF = _stage_table()
+
+
+def _stages(first: int, last: int, indent: str) -> str:
     """The stages ``first`` to ``last - 1`` (``ys = y + h sum_j A[s, j] K[j]``, then its rate into
-    ``K[s]``), each written out with its coefficients; with ``end_into``, stage ``last`` (the
-    solution's weights, ``A[12] = B``) into that array and its rate."""
-    out = []
-    for s in range(first, last + (end_into is not None)):
-        into = end_into if s == last else "ys"
-        out += ["for i in range(N):",
-                f"    {into}[i] = y[i] + ({_sum(A[s, :s])}) * h",
-                f"flight_rhs(t + {float(C[s])!r} * h, {into}, K[{s}], par)"]
-    return "\n".join(indent + line for line in out)
+    ``K[s]``; stage :data:`N_STAGES`, the solution's weights ``A[12] = B``, into ``y_new``) as one
+    loop over the stages with one call of the vector field: each component's sum taken term by term
+    in ``j``'s order over the nonzero coefficients (scipy's ``np.dot``'s terms, as the sum written out
+    with its literals took them, the same numbers), each term over all components at once."""
+    lines = [f"for s in range({first}, {last}):",
+             "    into = y_new if s == DP.N_STAGES else ys",
+             "    p = DP.STAGE_ROW[s]",
+             "    j = DP.STAGE_COL[p]",
+             "    c = DP.STAGE_COEF[p]",
+             "    for i in range(N):",
+             "        into[i] = K[j, i] * c",
+             "    for p in range(DP.STAGE_ROW[s] + 1, DP.STAGE_ROW[s + 1]):",
+             "        j = DP.STAGE_COL[p]",
+             "        c = DP.STAGE_COEF[p]",
+             "        for i in range(N):",
+             "            into[i] = into[i] + K[j, i] * c",
+             "    for i in range(N):",
+             "        into[i] = y[i] + into[i] * h",
+             "    flight_rhs(t + DP.C[s] * h, into, K[s], par)"]
+    return "\n".join(indent + line for line in lines)
 
 
 def _source() -> str:
-    """The driver's source (:data:`SOURCE`): the stages, the error norm and the dense output's
-    coefficients written out with scipy's coefficients."""
+    """The driver's source (:data:`SOURCE`): the error norm and the dense output's coefficients
+    written out with scipy's coefficients, the stages as one loop each (:func:`_stages`: one call of
+    the vector field in each, where the 15 stages written out made 15 to compile)."""
     dense = "\n".join(f"        F[{3 + r}, i] = ({_sum(D[r])}) * h" for r in range(N_DENSE - 3))
     return (_SOURCE.replace("@E5@", _sum(E5)).replace("@E3@", _sum(E3)).replace("@DENSE@", dense)
-            .replace("@STEP@", _stages(1, N_STAGES, " " * 12, "y_new"))
+            .replace("@STEP@", _stages(1, N_STAGES + 1, " " * 12))
             .replace("@EXTRA@", _stages(N_STAGES + 1, N_EXTENDED, " " * 12)))
 
 
@@ -358,8 +392,10 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
                 counts[3] += 1
             else:
                 t_hi = t_new
-                ys[:] = y_new
-                ghi[:] = gend
+                for i in range(N):
+                    ys[i] = y_new[i]
+                for i in range(E):
+                    ghi[i] = gend[i]
             imax, zero = DP.crossing(glo, ghi, active, directions)
             if imax >= 0 or zero:  # CVODE's Illinois search on (tlo, t_hi]
                 moved = False
@@ -380,13 +416,15 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
                     imid, zmid = DP.crossing(glo, gmid, active, directions)
                     if imid >= 0 or zmid:
                         t_hi = tmid
-                        ghi[:] = gmid
+                        for i in range(E):
+                            ghi[i] = gmid[i]
                         moved = True
                         side = 1
                         imax = imid
                         continue
                     tlo = tmid
-                    glo[:] = gmid
+                    for i in range(E):
+                        glo[i] = gmid[i]
                     side = 2
                 DP.mark_roots(glo, ghi, active, directions, roots)
                 if moved:
@@ -399,13 +437,16 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
             for i in range(E):
                 if not active[i] and ghi[i] != 0.0:
                     active[i] = True
-            glo[:] = ghi
+            for i in range(E):
+                glo[i] = ghi[i]
             tlo = t_hi
         if flag == DP.DOP853_ROOT:
-            y[:] = ys
+            for i in range(N):
+                y[i] = ys[i]
             break
         y, y_new = y_new, y
-        K[0] = K[12]
+        for i in range(N):
+            K[0, i] = K[12, i]
         t = t_new
         if t_new == t_end:
             flag = DP.DOP853_TSTOP

@@ -88,5 +88,9 @@ def _grow(T, Y, F, k, need):
     while cap < need:
         cap *= 2
     T2, Y2, F2 = np.empty(cap), np.empty((cap, Y.shape[1])), np.empty((cap, Y.shape[1]))
-    T2[:k], Y2[:k], F2[:k] = T[:k], Y[:k], F[:k]
+    for r in range(k):  # (element by element: a slice assignment compiles numba's shape-error message)
+        T2[r] = T[r]
+        for i in range(Y.shape[1]):
+            Y2[r, i] = Y[r, i]
+            F2[r, i] = F[r, i]
     return T2, Y2, F2

@@ -234,12 +234,14 @@ if CV is not None:
                 continue
             if spline:
                 size = offsets[k + 1] - offsets[k]
-                data[base_:base_ + size] = splines[offsets[k]:offsets[k + 1]]
+                for i in range(size):
+                    data[base_ + i] = splines[offsets[k] + i]
             else:
                 data[HD_EXT + EXT_A] = incoming[k]
             y0[:] = 0.0
             y0[0] = w
-            y0[1:1 + NZ] = z
+            for i in range(NZ):
+                y0[1 + i] = z[i]
             flag, ts, ys, _, roots = CV.fly(mem, yvec, t, y0, t1, rtol, atol, directions, data, NE, max_steps)
             ok = flag >= 0
             if ok:
@@ -253,7 +255,8 @@ if CV is not None:
             for i in range(ts.size):
                 if i == 0 or ts[i] - ts[i - 1] > 0.0:
                     T[S] = ts[i]
-                    Y[S] = ys[i]
+                    for j in range(NE):
+                        Y[S, j] = ys[i, j]
                     S += 1
             for i in range(s0, S):
                 if spline:
@@ -261,7 +264,8 @@ if CV is not None:
                 end_rhs_in(Y[i], F[i], par, data[HD_EXT:_HEAD], work)
             if P + 1 == starts.size:
                 st2 = np.zeros(2 * starts.size, np.int64)
-                st2[:P + 1] = starts[:P + 1]
+                for i in range(P + 1):
+                    st2[i] = starts[i]
                 starts = st2
             P += 1
             starts[P] = S
