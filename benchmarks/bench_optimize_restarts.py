@@ -24,9 +24,10 @@ missed. Nothing is asserted.
 Run: ``python benchmarks/bench_optimize_restarts.py [--workers W] [--sample N] [--local-starts K]
 [--searches S] [--evaluations E] [--search-evaluations E] [--seed S] [--out result.json] [--cache DIR]
 [--only K] [--polish N] [--contact-events {step,inside}] [--quick]``; ``--polish N`` the multistart's
-polish's designs (12 by default); ``--contact-events inside`` the example with ``rock.contact_events =
-"inside"`` (the lattice blow's re-contact inside its step: no border of the lattice's along the drilling
-rate's limit), for the multistart and the searches alike; ``--only K`` runs the ``K``-th restarted
+polish's designs (12 by default); ``--contact-events step`` the example with ``rock.contact_events =
+"step"`` (the lattice blow's re-contact at a whole step: the lattice's border along the drilling rate's
+limit; the example's own is ``"inside"``, the re-contact inside its step), for the multistart and the
+searches alike; ``--only K`` runs the ``K``-th restarted
 search alone (1 to ``--searches``;
 with ``--cache`` the multistart read from it: a search reproduced without the others); ``--cache DIR``
 makes a run resumable: the multistart's designs in ``DIR/multistart.json``
@@ -218,8 +219,9 @@ def main() -> None:
                    "there, read first (a killed run resumes)")
     p.add_argument("--only", type=int, default=None, help="run the K-th restarted search alone")
     p.add_argument("--polish", type=int, default=12, help="the multistart's polish's most designs")
-    p.add_argument("--contact-events", choices=("step", "inside"), default="step",
-                   help="the example's rock.contact_events (the lattice blow's re-contact)")
+    p.add_argument("--contact-events", choices=("step", "inside"), default=None,
+                   help="the example's rock.contact_events (the lattice blow's re-contact; its own, "
+                   "'inside', where not given)")
     p.add_argument("--quick", action="store_true")
     args = p.parse_args()
     if args.only is not None and not 1 <= args.only <= args.searches:
@@ -233,7 +235,7 @@ def main() -> None:
     from distributed import Client, LocalCluster, as_completed
 
     config, _ = read_config(EXAMPLE)
-    if args.contact_events != "step":  # (the example's own setting is the default's)
+    if args.contact_events is not None:  # (else the example's own setting, "inside")
         config = with_values(config, {"rock.contact_events": args.contact_events})
     if args.cache is not None:
         os.makedirs(args.cache, exist_ok=True)
@@ -248,7 +250,7 @@ def main() -> None:
                        worker_dashboard_address=None, silence_logs=logging.ERROR) as cluster,
           Client(cluster) as client):
         t0 = time.perf_counter()
-        ms = optimize_drifter(EXAMPLE if args.contact_events == "step" else config, vary, objective=OBJECTIVE,
+        ms = optimize_drifter(EXAMPLE if args.contact_events is None else config, vary, objective=OBJECTIVE,
                               constraints=CONSTRAINTS,
                               method="multistart", sample=args.sample, local_starts=args.local_starts,
                               seed=args.seed, polish=args.polish,

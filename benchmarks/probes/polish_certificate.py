@@ -64,8 +64,7 @@ class Problem:
         from impactbar.physical.optimize_problem import DEFAULT_CONSTRAINTS, _limits
 
         self.cfg, self.folder = read_config(EXAMPLE)
-        if contact_events != "step":
-            self.cfg = with_values(self.cfg, {"rock.contact_events": contact_events})
+        self.cfg = with_values(self.cfg, {"rock.contact_events": contact_events})  # (the example's: "inside")
         self.spec = design_bounds(self.cfg, VARY, self.folder)
         self.keys = list(self.spec)
         self.lo = np.array([self.spec[k]["low"] for k in self.keys])

@@ -51,10 +51,53 @@ def collar(factor: float) -> dict:
 
 def window_end(monkeypatch) -> None:
     """Builds the designs of the calling test with their blows ended at the law's fixed window
-    (``RodRock(driven_end="window")``), where :data:`WINDOW_OPTIMUM`, :data:`SEARCHED` and
-    :func:`collar`'s designs were found and measured (theory §11, "The coupled blow")."""
-    import functools
-
+    (``RodRock(driven_end="window")``) and their contacts' events at the lattice's step ends
+    (``contact_events="step"``, the example's setting before it took ``"inside"``), where
+    :data:`WINDOW_OPTIMUM`, :data:`SEARCHED` and :func:`collar`'s designs were found and measured
+    (theory §11, "The coupled blow")."""
     import impactbar.physical.rock as rock
 
-    monkeypatch.setattr(rock, "RodRock", functools.partial(rock.RodRock, driven_end="window"))
+    law = rock.RodRock
+
+    def measured_there(*args, **kwargs):
+        return law(*args, **{**kwargs, "driven_end": "window", "contact_events": "step"})
+
+    monkeypatch.setattr(rock, "RodRock", measured_there)
+
+
+def documented_problem():
+    """The page's six-variable problem (docs/optimising_a_drifter.md, the drilling rate held;
+    ``benchmarks/bench_optimize_drifter.py``'s) on the example as the calling test builds it: the
+    config, its folder, the bounds' spec, the keys, the spans (SI), the limits and ``fresh(u)``, the
+    record and orbit of a fresh ``orbit()`` of the scaled design ``u``, and ``scaled(changes)``, a
+    design's scaled variables."""
+    import numpy as np
+
+    from impactbar.physical import build, read_config, with_values
+    from impactbar.physical.design_keys import design_bounds
+    from impactbar.physical.optimize_problem import DEFAULT_CONSTRAINTS, _limits, evaluate_design
+
+    vary = {"piston.collar_diameter": ("47 mm", "52 mm"), "piston.front_rod_diameter": ("43 mm", "47 mm"),
+            "piston.rear_rod_diameter": ("38 mm", "43 mm"), "chambers.rear_volume": ("0.06 L", "0.2 L"),
+            "valve.switch_out": ("18 mm", "25 mm"), "accumulator.precharge": ("8 MPa", "14 MPa")}
+    cfg, folder = read_config(EXAMPLE)
+    spec = design_bounds(cfg, vary, folder)
+    keys = list(spec)
+    lo = np.array([spec[k]["low"] for k in keys])
+    span = np.array([spec[k]["high"] - lo[j] for j, k in enumerate(keys)])
+    limits = _limits({"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"},
+                     build(cfg, folder), ideal=False)
+    kept = dict.fromkeys(DEFAULT_CONSTRAINTS) | limits
+    units = {k: spec[k]["unit"] for k in keys}
+
+    def fresh(u):
+        changes = {k: f"{float(x)!r} {units[k]}" for k, x in zip(keys, lo + span * u, strict=True)}
+        rec, orbit = evaluate_design(build(with_values(cfg, changes), folder), kept)
+        rec.update(changes=changes, values={k: float(x) for k, x in zip(keys, lo + span * u, strict=True)})
+        return rec, orbit
+
+    def scaled(changes):
+        at = design_bounds(with_values(cfg, changes), vary, folder)
+        return (np.array([at[k]["start"] for k in keys]) - lo) / span
+
+    return cfg, folder, spec, keys, span, limits, fresh, scaled

@@ -21,6 +21,7 @@ from impactbar.physical.optimize_drifter import evaluate_blow
 
 pytest.importorskip("pint")
 sys.path.insert(0, str(Path(__file__).parent))
+from drifter_optimum import documented_problem  # noqa: E402
 from test_optimize_drifter_checks import MASS, V, _ideal_drifter_config  # noqa: E402
 
 # optimize_piston's three segments at the example's mass and length (its lengths: the searched
@@ -301,41 +302,6 @@ def test_the_polish_runs_slsqp_on_one_blas_thread_whatever_the_caller_s():
     assert res.improved and seen and set(seen) == {1}
     assert after and set(after) == {min(2, os.cpu_count() or 1)}
 
-def _documented_problem():
-    """The page's six-variable problem (docs/optimising_a_drifter.md, the drilling rate held): the
-    config, its folder, the bounds' spec, the keys, the lows and spans (SI), the limits and
-    ``fresh(u)``, the record and orbit of a fresh ``orbit()`` of the scaled design ``u``."""
-    from impactbar.physical import read_config
-    from impactbar.physical.design_keys import design_bounds
-    from impactbar.physical.optimize_problem import DEFAULT_CONSTRAINTS, _limits, evaluate_design
-
-    example = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock_piston.toml"
-    vary = {"piston.collar_diameter": ("47 mm", "52 mm"), "piston.front_rod_diameter": ("43 mm", "47 mm"),
-            "piston.rear_rod_diameter": ("38 mm", "43 mm"), "chambers.rear_volume": ("0.06 L", "0.2 L"),
-            "valve.switch_out": ("18 mm", "25 mm"), "accumulator.precharge": ("8 MPa", "14 MPa")}
-    cfg, folder = read_config(example)
-    spec = design_bounds(cfg, vary, folder)
-    keys = list(spec)
-    lo = np.array([spec[k]["low"] for k in keys])
-    span = np.array([spec[k]["high"] - lo[j] for j, k in enumerate(keys)])
-    limits = _limits({"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"},
-                     build(cfg, folder), ideal=False)
-    kept = dict.fromkeys(DEFAULT_CONSTRAINTS) | limits
-    units = {k: spec[k]["unit"] for k in keys}
-
-    def fresh(u):
-        changes = {k: f"{float(x)!r} {units[k]}" for k, x in zip(keys, lo + span * u, strict=True)}
-        rec, orbit = evaluate_design(build(with_values(cfg, changes), folder), kept)
-        rec.update(changes=changes, values={k: float(x) for k, x in zip(keys, lo + span * u, strict=True)})
-        return rec, orbit
-
-    def scaled(changes):  # a design's scaled variables
-        at = design_bounds(with_values(cfg, changes), vary, folder)
-        return (np.array([at[k]["start"] for k in keys]) - lo) / span
-
-    return cfg, folder, spec, keys, span, limits, fresh, scaled
-
-
 @functools.cache
 def _documented_certificate():
     """The page's design of the search with the blows ended at the law's window
@@ -347,7 +313,7 @@ def _documented_certificate():
 
     from impactbar.physical.optimality import central_gradients
 
-    *_, keys, _, _, fresh, scaled = _documented_problem()
+    *_, keys, _, _, fresh, scaled = documented_problem()
     fkey = "drilling_rate_per_kW"
     u = scaled(OPTIMUM)
     rec = fresh(u)[0]
@@ -375,7 +341,7 @@ def test_the_certificate_s_gradients_refine_their_step_at_a_border(monkeypatch):
     window_end(monkeypatch)  # (where the page's figures of this design were measured)
     from impactbar.physical.optimize_problem import _design_gradient, _refined_gradient
 
-    cfg, folder, spec, keys, span, limits, fresh, scaled = _documented_problem()
+    cfg, folder, spec, keys, span, limits, fresh, scaled = documented_problem()
     fkey = "drilling_rate_per_kW"
     best = ["47.77 mm", "46.593 mm", "41.383 mm", "0.0796 L", "23.57 mm", "8 MPa"]
     u = scaled(dict(zip(keys, best, strict=True)))
@@ -415,7 +381,7 @@ def test_the_documented_design_lies_before_a_border_of_its_orbit(monkeypatch):
     window_end(monkeypatch)  # (where the page's figures of this design were measured)
     import re
 
-    *_, fresh, _ = _documented_problem()
+    *_, fresh, _ = documented_problem()
     fkey = "drilling_rate_per_kW"
     u, rec, g, G, cert = _documented_certificate()
     text = re.sub(r"\s+", " ", (Path(__file__).resolve().parents[2] / "docs" / "optimising_a_drifter.md")
@@ -502,7 +468,7 @@ def test_the_border_is_the_lattice_blow_s_recontact_moving_a_step(monkeypatch):
     from drifter_optimum import window_end
 
     window_end(monkeypatch)  # (where the page's figures of this design were measured)
-    cfg, folder, spec, keys, span, *_ = _documented_problem()
+    cfg, folder, spec, keys, span, *_ = documented_problem()
     u, rec, g, G, cert = _documented_certificate()
     p = g + cert.multipliers["min_drilling_rate"] * G[-1]
     ph = p / np.linalg.norm(p)

@@ -220,9 +220,10 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
     four flights each, against two solves of an orbit (each tens of flights from rest, a few
     continued from a neighbour) for central differences of orbits. On the rigid preset 0.09 s per
     key (0.04 s without ``multipliers``) against 0.5 s for two fresh orbits (0.28 s for two
-    continued); on the example drifter on the rock (``examples/circuit_drifter_rock_piston.toml``),
-    whose blows' Jacobians are central differences, 4.5 s per key (0.7 s without ``multipliers``)
-    against 12 to 16 s for two continued orbits (``benchmarks/bench_sensitivity.py``).
+    continued); on the example drifter on the rock (``examples/circuit_drifter_rock_piston.toml``, as
+    measured: on its lattice's step setting), whose blows' Jacobians are central differences, 4.5 s
+    per key (0.7 s without ``multipliers``) against 12 to 16 s for two continued orbits
+    (``benchmarks/bench_sensitivity.py``).
 
     Parameters
     ----------
