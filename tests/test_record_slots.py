@@ -211,7 +211,6 @@ WIDER_NOT_RECORDS = {
     "drives/circuit/endflight.py": {"T", "t", "y"},
     # Y: rows of states: the first and last; t: a time grid's first and last
     "drives/circuit/flight.py": {"Y", "t"},
-    "drives/circuit/watch.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
     # q: the modal coordinates: [0] the rigid mode; t: a time grid's first and last; v: the modal
     # velocities ([0] the rigid mode) or a series' last
     "drives/flight.py": {"q", "t", "v"},

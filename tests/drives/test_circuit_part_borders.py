@@ -17,6 +17,8 @@ change.
   the branch's border collision says.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -25,9 +27,9 @@ from impactbar.continuation.driven import border_tests
 from impactbar.drives.circuit import _network as NW
 from impactbar.orbits import find_orbit
 
-pint = pytest.importorskip("pint")
+pytest.importorskip("pint")
 
-ROOT = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples"
+ROOT = Path(__file__).resolve().parents[2] / "examples"
 
 
 def _changed(path, values):

@@ -675,7 +675,7 @@ class HydraulicCircuitDrive(Drive):
         -------
         dict of float
         """
-        out = pressure_margins(self, pieces)
+        out = pressure_margins(self, self._watched, pieces)
         if surfaces:
             out.update(surface_tests(self._watched, pieces))
         return out

@@ -68,19 +68,26 @@ class Watch:
         return int(x > self.level if self.kind == NW.RELIEF else x >= self.level)
 
 
-def _level(record, pressure, ns):
-    """A watched level's ``quantity(q, z)`` (the gap ``-q_0``, the spool's position ``z[ns]`` or a
-    pressure drop)."""
-    if record[LV.GAP] == LV.SPOOL:
-        return lambda q, z: float(z[ns])
-    return lambda q, z: LV.quantity(record, lambda j: pressure(z, j), -float(q[0]))
+def _value(form):
+    """A linear form's ``quantity(q, z)`` (:func:`_level_form`): its terms summed in their order, then
+    its offset where it has one, so that a gap is ``-q_0``, a position ``z_j`` and a pressure drop
+    ``p_a - p_b`` (a held node's pressure in the offset) to the bit."""
+    terms, offset = form
+
+    def value(q, z):
+        x = None
+        for space, i, c in terms:
+            t = c * float(q[i] if space == "q" else z[i])
+            x = t if x is None else x + t
+        return offset if x is None else (x + offset if offset != 0.0 else x)
+    return value
 
 
-def _stop(record, pressure, ns):
-    """A spool's stop's ``quantity(q, z)`` (:func:`.kinds.spool.stop_quantity`)."""
-    ac, a0 = float(record[SP.LARGE]), float(record[SP.SMALL])
-    c, s = int(record[SP.CONTROL]), int(record[SP.SUPPLY])
-    return lambda q, z: SP.stop_quantity(float(z[ns]), ac * pressure(z, c) - a0 * pressure(z, s))
+def _stop(form, force):
+    """A spool's stop's ``quantity(q, z)`` (:func:`.kinds.spool.stop_quantity`) from the linear
+    forms of its position and of the oil's force on it."""
+    x, f = _value(form), _value(force)
+    return lambda q, z: SP.stop_quantity(x(q, z), f(q, z))
 
 
 def _pressure_form(nodes, ns, recs) -> tuple:
@@ -95,10 +102,16 @@ def _pressure_form(nodes, ns, recs) -> tuple:
     return tuple(terms), offset
 
 
+def _position(ns) -> tuple:
+    """The spool's position ``z[ns]`` (the network's ``x_v`` slot) as a linear form."""
+    return (("z", ns, 1.0),), 0.0
+
+
 def _level_form(record, ns, recs) -> tuple:
-    """A watched level's quantity (:func:`_level`) as a linear form of the flight's columns."""
+    """A watched level's quantity (the gap ``-q_0``, the spool's position or a pressure drop, as
+    :func:`.kinds.level.quantity` reads it) as a linear form of the flight's columns."""
     if record[LV.GAP] == LV.SPOOL:
-        return (("z", ns, 1.0),), 0.0
+        return _position(ns)
     if record[LV.GAP] > 0.5:
         return (("q", 0, -1.0),), 0.0
     return _pressure_form(((int(record[SOURCE]), 1.0), (int(record[TARGET]), -1.0)), ns, recs)
@@ -127,34 +140,26 @@ def watched(net, events, own=()) -> tuple:
             out.append((int(r[NW.R_EV]), float(r[NW.R_SET]), kind, node,
                         lambda q, z, j=node: pressure(z, j), (), ()))
         elif kind == NW.LEVEL and r[NW.LV_EV] >= 0:
-            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure, ns),
-                        _level_form(r, ns, recs), ()))
+            form = _level_form(r, ns, recs)
+            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _value(form), form, ()))
         elif kind == NW.SPOOL and r[SP.EVENT] >= 0:
+            form = _position(ns)
             force = _pressure_form(((int(r[SP.CONTROL]), float(r[SP.LARGE])),
                                     (int(r[SP.SUPPLY]), -float(r[SP.SMALL]))), ns, recs)
-            out.append((int(r[SP.EVENT]), 0.0, kind, None, _stop(r.copy(), pressure, ns),
-                        ((("z", ns, 1.0),), 0.0), force))
+            out.append((int(r[SP.EVENT]), 0.0, kind, None, _stop(form, force), form, force))
     watches = [Watch(events[slot], slot, level, kind, node, f, form, force)
                for slot, level, kind, node, f, form, force in out]
     return tuple(sorted((w for w in watches if w.name not in own), key=lambda w: w.slot))
 
 
-def _columns(piece, form) -> tuple:
-    """A linear form's columns of a flight piece's ``y`` and their coefficients."""
-    terms, _ = form
-    return [i if space == "q" else 2 * piece.M + i for space, i, _ in terms], np.array([c for *_, c in terms])
-
-
-def _values(piece, form) -> np.ndarray:
-    """A linear form's values over a flight piece's steps, shape ``(S,)``."""
-    (cols, c), (_, offset) = _columns(piece, form), form
-    return piece.y[:, cols] @ c + offset
-
-
-def _along(piece, form) -> tuple:
-    """A linear form's values and rates over a flight piece's steps, shapes ``(S,)``."""
-    cols, c = _columns(piece, form)
-    return _values(piece, form), piece.f[:, cols] @ c
+def _along(piece, form, rates: bool = True):
+    """A linear form's values over a flight piece's steps and, with ``rates``, their rates, shapes
+    ``(S,)``."""
+    terms, offset = form
+    cols = [i if space == "q" else 2 * piece.M + i for space, i, _ in terms]
+    c = np.array([coef for *_, coef in terms])
+    values = piece.y[:, cols] @ c + offset
+    return (values, piece.f[:, cols] @ c) if rates else values
 
 
 def border_tests(watches, pieces) -> dict:
@@ -189,15 +194,15 @@ def border_tests(watches, pieces) -> dict:
             (lo,), (hi,) = hermite_extremes(((p.t, *_along(p, w.form)) for p in flights), 1)
             out[f"{w.name}.max"], out[f"{w.name}.min"] = float(hi) - w.level, float(lo) - w.level
         elif w.kind == NW.SPOOL:
-            x = np.concatenate([_values(p, w.form) for p in flights])
-            f = np.concatenate([_values(p, w.force) for p in flights])
+            x = np.concatenate([_along(p, w.form, rates=False) for p in flights])
+            f = np.concatenate([_along(p, w.force, rates=False) for p in flights])
             high, low = x >= 1.0, x <= 0.0
             out[f"{w.name}.high"] = float(f[high].max()) if high.any() else float(x.max()) - 1.0
             out[f"{w.name}.low"] = float((-f[low]).max() if low.any() else -x.min())
     return out
 
 
-def pressure_margins(drive, pieces) -> dict:
+def pressure_margins(drive, watches, pieces) -> dict:
     """The circuit's pressure margins over a period (:meth:`.HydraulicCircuitDrive.border_tests`
     without its levels and stops): each watched node's (an extra part's accumulator: its least
     pressure less the pre-charge; a relief: its setting less the greatest), then the preset's
@@ -206,6 +211,9 @@ def pressure_margins(drive, pieces) -> dict:
     Parameters
     ----------
     drive : HydraulicCircuitDrive
+        Its supply and accumulator.
+    watches : tuple of Watch
+        The drive's (:func:`watched`); those of a node read here.
     pieces : list
         The period's pieces (those without a flight's extremes left out).
 
@@ -216,7 +224,7 @@ def pressure_margins(drive, pieces) -> dict:
     """
     sup, acc = drive.supply, drive.accumulator
     out: dict = {}
-    for w in drive._watched:
+    for w in watches:
         ext = [p.extremes(w.node) for p in pieces if hasattr(p, "extremes") and w.node is not None]
         if ext:
             lo, hi = min(low for low, _ in ext), max(high for _, high in ext)
