@@ -3,7 +3,8 @@ pool its last blow filled is the blow started on the default pool (grown by runs
 bit; a blow gone on from the snapshot of one whose drive was the same up to there is the blow from
 its start, to the bit; the force's cubics are scipy's Hermite spline's, to the bit; the arriving
 wave's scalar callable is scipy's cubic spline, to the bit; the marching iteration's blow is the
-plain fixed-point iteration's, within the iteration's tolerance."""
+plain fixed-point iteration's, within the iteration's tolerance; a record's histories sampled when first
+read are those sampled at once, to the bit."""
 
 import dataclasses
 
@@ -211,3 +212,37 @@ def test_the_iterates_take_their_predecessors_splines_where_a_is_the_same(arriva
                  (fast.drive_state.z, fresh.drive_state.z), (fast.gaps, fresh.gaps)):
         assert np.array_equal(np.asarray(a), np.asarray(b))
     assert fast.record.work_on_rock == fresh.record.work_on_rock and fast.drive_work == fresh.drive_work
+
+
+def _same_record(a, b):
+    """Two :class:`Blow` records field by field, to the bit (arrays by their values and shapes)."""
+    for f in dataclasses.fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            assert np.array_equal(x, y) and np.shape(x) == np.shape(y), f.name
+        elif f.name == "exact":
+            assert x is y
+        else:
+            assert x == y or (x != x and y != y), f.name
+
+
+def test_a_records_blow_sampled_when_first_read_is_the_one_sampled_at_once(driven_map):
+    """The record's histories are sampled when first read, after the thread's next blows reused the
+    solver's pool: the same record, to the bit, as the one sampled at once; with ``stored_apart``
+    (the coupled blow's) its work on rock the work dissipated in the rock, as the eager record's."""
+    from impactbar.laws.rodrock.exactrecord import blow_from_exact
+
+    bmap, q, v = driven_map
+    rec = bmap.contact(q, v)
+    assert rec._blow is None  # (nothing sampled yet)
+    eager = blow_from_exact(rec.exact, *rec._blow_of)
+    other = v.copy()
+    other[0] *= 1.3
+    later = bmap.contact(q, other)  # (a blow on the reused pool: its pieces overwrite the solver's arrays)
+    assert later.blow.times.size > 1
+    assert later.exact.work_on_rock != rec.exact.work_on_rock
+    rec.stored_apart()
+    assert rec._blow is None
+    _same_record(rec.blow, eager.with_stored_apart())
+    assert rec.work_on_rock == eager.rock_dissipated and rec.blow.stored_apart  # (read through the record)
+    assert rec.blow is rec.blow  # (sampled once)

@@ -423,7 +423,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
     # (marching: the last iterate's switch log, logged from the impact on, the tangent's schedule)
     rec.switch_log = None if not march else (kept_primal(*keep["workspace"], float(ex.duration)), on_stop)
-    rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
+    rec.stored_apart()  # the work on rock the dissipated work (theory §11; when it is sampled)
     rec.coupling = Coupling(breaks, [a.spline for a in incoming], Z0)  # (the blow's tangent: coupled_tangent)
     work = float(sum(p.piston_work() for p in fl.pieces))
     gaps = _rigid_gaps(ex, force, q, v, t0, breaks.size - 1)
