@@ -32,6 +32,7 @@ import numpy as np
 
 import impactbar.laws.rodrock.coupled_exact as CE
 import impactbar.laws.rodrock.exact as EXM
+import impactbar.laws.rodrock.exactrecord as ER
 from impactbar import find_orbit
 from impactbar.laws.rodrock import _records as S
 from impactbar.laws.rodrock.exactmap import ExactBlowMap, initial_waves
@@ -54,11 +55,12 @@ def _setup():
 
 def counted(drifter, exact) -> list:
     """One warm orbit's exact coupled blows: ``(arrival, rounds, final force, record)`` each, a round
-    ``(start, horizon, windows, pieces)`` (``start`` None: from the impact), and the splines."""
+    ``(start, horizon, windows, pieces)`` (``start`` None: from the impact), and the splines made, taken
+    and the records sampled."""
     find_orbit(exact, drifter.drive())  # (untimed: compilation, caches)
-    blows, runs, made = [], [], [0, 0]
+    blows, runs, made = [], [], [0, 0, 0]
     plain_run, plain_contact, plain_init = EXM._run, CE.driven_exact_contact, CE._Force.__init__
-    plain_spline = CE._spline_callable
+    plain_spline, plain_sampled = CE._spline_callable, ER.blow_from_exact
     forces = []
 
     def run(ws, t_max, stops, h, snaps, scale):
@@ -88,14 +90,19 @@ def counted(drifter, exact) -> list:
         made[1] += len(out)
         return out
 
+    def sampled(*args, **kwargs):
+        made[2] += 1
+        return plain_sampled(*args, **kwargs)
+
     plain_callables = CE._Incoming.callables
     EXM._run, CE.driven_exact_contact, CE._Force.__init__ = run, contact, init
-    CE._spline_callable, CE._Incoming.callables = spline, callables
+    CE._spline_callable, CE._Incoming.callables, ER.blow_from_exact = spline, callables, sampled
     try:
         find_orbit(exact, drifter.drive())
     finally:
         EXM._run, CE.driven_exact_contact, CE._Force.__init__ = plain_run, plain_contact, plain_init
         CE._spline_callable, CE._Incoming.callables = plain_spline, plain_callables
+        ER.blow_from_exact = plain_sampled
     return blows, made
 
 
@@ -152,7 +159,7 @@ def main(argv=None) -> int:
     blows, made = counted(drifter, exact)
     T0 = float(blows[0][3]._map.basis.travel[0])
     print(f"{len(blows)} exact coupled blows, {sum(len(b[1]) for b in blows)} solver runs; T0 = "
-          f"{T0:.6g} (model time); splines made {made[0]} of {made[1]}")
+          f"{T0:.6g} (model time); splines made {made[0]} of {made[1]}; records sampled {made[2]}")
     for i, (_, runs, _, rec) in enumerate(blows):
         print(f"blow {i + 1}: ends at {rec.duration / T0:.4f} T0 ({rec.exact.ended_by}), "
               f"{rec.exact.windows} windows, {rec.exact.pieces} pieces")
