@@ -145,8 +145,8 @@ class DriveAbilities:
     start_mode : callable or None
         ``start_mode(mode, q, v, z)``: the mode a flight of a periodic orbit's block starts in from
         the state ``(q, v, z)``, given the block's mode (fixed from the guess): the flags that the
-        state decides set by it where they disagree (the oil circuit's watched levels,
-        :func:`~impactbar.drives.circuit.watch.consistent_mode`); ``mode`` itself where they agree.
+        state decides set by it where they disagree (the oil circuit's watched levels: its module
+        ``watch``'s ``consistent_mode``); ``mode`` itself where they agree.
         ``None``: the block's mode.
 
     Examples

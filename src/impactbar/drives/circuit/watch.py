@@ -163,8 +163,8 @@ def consistent_mode(watches, mode, q, z) -> tuple:
     reached before the impact at the guess and no longer at the block's state kept its flag "open"
     while the pressure drop was below it: its falling crossing, watched from above, never came, and
     where the cracking level was passed next the flags chose the opening's rising piece far below
-    its range (an opening of some -400, the supply pressure driven past the relief's setting, and
-    CVODE's convergence failures).
+    its range (an opening of -13,000 by the time the supply's pressure passed the relief's
+    setting, and CVODE's convergence failures).
 
     Parameters
     ----------
