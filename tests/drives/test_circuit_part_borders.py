@@ -15,6 +15,12 @@ change.
   (``examples/circuit_drill_parts.toml``) meets the cushion's last kink (45 mm): the piston's
   greatest gap over the period, from fresh orbits' histories on either side, crosses the kink where
   the branch's border collision says.
+- Continued in the check valve's cracking pressure, the same drill meets the valve's full opening: the
+  front chamber's greatest pressure drop to the supply, at the impact, falls below the full opening's
+  level. A block's flight from a state past that level, in the mode of an orbit before it (the
+  corrector's first iterate), starts with the flag the state says and passes; the branch reaches its
+  end, and fresh orbits' pressure histories on either side cross the level where its border
+  collision says.
 """
 
 from pathlib import Path
@@ -22,10 +28,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from impactbar import physical
+from impactbar import BranchStatus, physical
 from impactbar.continuation.driven import border_tests
 from impactbar.drives.circuit import _network as NW
 from impactbar.orbits import find_orbit
+from impactbar.orbits.driven import orbit_problem
 
 pytest.importorskip("pint")
 
@@ -109,3 +116,59 @@ def test_continuation_locates_where_the_piston_stops_reaching_the_cushions_last_
     assert g0 < 0.0 < g1  # (a later switch, a longer return stroke)
     crossing = s0 - g0 * (s1 - s0) / (g1 - g0)
     assert crossing == pytest.approx(at_mm, rel=1e-3)
+
+
+def test_a_blocks_flight_past_the_check_valves_full_opening_starts_in_the_mode_its_state_says():
+    # the orbit at 0.0922 MPa: the drop at the impact above the full opening's level (its flag set)
+    before = _changed(ROOT / "circuit_drill_parts.toml",
+                      {"parts.check.cracking_pressure": "0.0922 MPa"}).orbit()
+    after = _changed(ROOT / "circuit_drill_parts.toml", {"parts.check.cracking_pressure": "0.0944 MPa"})
+    ob = before.orbit
+    X = ob.problem.unknowns(ob)
+    (w,) = [w for w in ob.drive._watched if w.name == "check_open"]
+    M = ob.model.n_modes + 1
+    ((_, mode),) = ob.problem.blocks
+    assert mode[1 + w.slot] == 1 and w.quantity(X[:M], X[2 * M:]) > w.level
+    # that orbit's start flown at 0.0944 MPa, whose full opening lies above the drop at the start (the
+    # corrector's first iterate): the flight once went on with the flag set and failed in CVODE
+    problem = orbit_problem(ob.model, after.drive(), 1, ob.problem.settings).adopt(ob.problem)
+    (w2,) = [w for w in after.drive()._watched if w.name == "check_open"]
+    assert w2.quantity(X[:M], X[2 * M:]) < w2.level
+    r = problem.root_value(X)
+    assert np.all(np.isfinite(r)) and np.abs(r).max() < 1e-2 * np.abs(X).max()
+    # the period's events: no full opening crossed, the cracking level passed once each way
+    names = [e for e, _ in problem.event_pattern(X)[1:]]
+    assert "check_open" not in names and names.count("check_crack") == 2
+
+
+@pytest.fixture(scope="module")
+def check_branch():
+    d = physical.load(ROOT / "circuit_drill_parts.toml")
+    return physical.continue_circuit(d, "parts.check.cracking_pressure", "0.2 MPa")
+
+
+def test_continuation_passes_where_the_check_valve_stops_opening_fully(check_branch):
+    branch = check_branch
+    assert branch.branch.status == BranchStatus.REACHED
+    assert branch.branch.values[-1] == pytest.approx(0.02, rel=1e-12)  # (0.2 MPa in 10 MPa)
+    assert [e.surface for e in branch.branch.events] == ["check_open.max"]
+    (event,) = branch.branch.events
+    assert abs(border_tests(event.orbit)["check_open.max"]) < 1e-8
+    (si,) = [e for e in branch.events if e["kind"] == "border-collision check_open.max"]
+    at = si["value"]  # (Pa)
+    assert at == pytest.approx(92368.7, abs=0.5)  # (benchmarks/HISTORY.md quotes it)
+    assert round(at * 1e-6, 5) == 0.09237  # (theory §11 quotes it, MPa)
+    # the greatest drop less the full opening's level (0.05 MPa above cracking) from fresh orbits'
+    # pressure histories on either side: it is the drop at the impact, and it crosses 0 there
+    sides = []
+    for factor in (0.999, 1.001):
+        point = _changed(ROOT / "circuit_drill_parts.toml",
+                         {"parts.check.cracking_pressure": f"{at * factor} Pa"}).orbit()
+        h = point.histories(20000)
+        drop = h["p_f_Pa"] - h["p_s_Pa"] - (at * factor + 0.05e6)
+        assert drop.max() == pytest.approx(drop[0], abs=1e-9 * 0.05e6)  # (at the impact)
+        sides.append((at * factor, drop.max()))
+    (s0, g0), (s1, g1) = sides
+    assert g0 > 0.0 > g1  # (a higher cracking pressure, the full opening no longer reached)
+    crossing = s0 - g0 * (s1 - s0) / (g1 - g0)
+    assert crossing == pytest.approx(at, rel=1e-3)

@@ -142,6 +142,12 @@ class DriveAbilities:
         (:class:`~impactbar.drives.OrbitProblem`), in place of the generic shooting problem of
         :mod:`impactbar.orbits.driven`; ``constant_load(p)`` gives the load of a constant force
         ``p`` (for a contact law's map).
+    start_mode : callable or None
+        ``start_mode(mode, q, v, z)``: the mode a flight of a periodic orbit's block starts in from
+        the state ``(q, v, z)``, given the block's mode (fixed from the guess): the flags that the
+        state decides set by it where they disagree (the oil circuit's watched levels: its module
+        ``watch``'s ``consistent_mode``); ``mode`` itself where they agree.
+        ``None``: the block's mode.
 
     Examples
     --------
@@ -158,6 +164,7 @@ class DriveAbilities:
     end_tangent: Callable[..., Any] | None = None
     border_tests: Callable[..., dict] | None = None
     orbit_problem: Callable[..., Any] | None = None
+    start_mode: Callable[..., Any] | None = None
 
 
 #: the abilities of a drive that has none (the default of :attr:`impactbar.Drive.abilities`)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..drives.orbitproblem import OrbitData, sorted_multipliers
 
-__all__ = ["orbit_data", "starts_on_stop"]
+__all__ = ["orbit_data", "start_mode", "starts_on_stop"]
 
 
 def starts_on_stop(problem, y) -> bool:
@@ -31,6 +31,32 @@ def starts_on_stop(problem, y) -> bool:
     bool
     """
     return problem.on_stop or float(problem.model.end_weights @ np.asarray(y[:problem.M], dtype=float)) >= 0.0
+
+
+def start_mode(drive, mode, q, v, z):
+    """The mode a block's flight starts in: the block's ``mode`` (fixed from the guess, theory §10)
+    as the drive's ability ``start_mode`` sets it from the state at the start (the oil circuit's
+    watched levels' flags, :func:`impactbar.drives.circuit.watch.consistent_mode`), else ``mode``.
+    As the parameters move the block's state to the other side of a level (a check valve's full
+    opening reached just before the impact, and no longer), the fixed flag said the level was
+    passed while the state had not passed it: the flight then watched the level from the wrong
+    side, never crossed it and went on in a piece of the opening's law far outside its range.
+
+    Parameters
+    ----------
+    drive : Drive
+    mode : hashable
+        The block's mode.
+    q, v, z : numpy.ndarray
+        The flight's start: modal displacements (on the section), velocities, the drive's state.
+
+    Returns
+    -------
+    hashable
+        ``mode`` itself where the state agrees with it.
+    """
+    own = drive.abilities.start_mode
+    return mode if own is None else own(mode, q, v, z)
 
 
 def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:

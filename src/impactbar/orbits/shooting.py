@@ -37,7 +37,7 @@ from ._settling import (
     other_period,
     surfaces_ahead,
 )
-from ._shooting_data import orbit_data, starts_on_stop
+from ._shooting_data import orbit_data, start_mode, starts_on_stop
 from .driven_orbit import DrivenOrbit, _constant_load
 
 __all__ = ["ShootingProblem"]
@@ -222,7 +222,7 @@ class ShootingProblem(OrbitProblem):
         onto = starts_on_stop(self, q)
         if onto:
             q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
-        state = DriveState(mode, np.array(z, dtype=float))
+        state = DriveState(start_mode(drive, mode, q, v, z), np.array(z, dtype=float))
         pieces, events = [], []
         end = tau + HORIZON
         D = None

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ..abilities import DriveAbilities, OwnFlight, Quadratures
 from ..base import DriveTraits
 from ..params import DriveParameters
+from .watch import consistent_mode
 
 __all__ = ["circuit_traits", "circuit_params", "circuit_abilities"]
 
@@ -44,11 +45,13 @@ def circuit_abilities(drive) -> DriveAbilities:
     energy account's quadratures (:meth:`~.HydraulicCircuitDrive.quadratures`, the work on the
     piston among them), the coupled blows (:meth:`~.HydraulicCircuitDrive.end_flight`, their tangents
     :meth:`~.HydraulicCircuitDrive.end_tangent`) and the
-    border tests (:meth:`~.HydraulicCircuitDrive.border_tests`)."""
+    border tests (:meth:`~.HydraulicCircuitDrive.border_tests`) and the watched levels' flags a
+    block's state decides (:func:`.watch.consistent_mode`)."""
     return DriveAbilities(
         flight=OwnFlight(drive.flight, variational=drive.variational,
                          state_settings=drive.variational_state_settings, carried=drive.carries,
                          root_settings=drive.root_settings,
                          charged_start=drive.charged_start),
         quadratures=Quadratures(drive.n_quadratures, drive.quadratures, drive.piston_work_quadrature),
-        end_flight=drive.end_flight, end_tangent=drive.end_tangent, border_tests=drive.border_tests)
+        end_flight=drive.end_flight, end_tangent=drive.end_tangent, border_tests=drive.border_tests,
+        start_mode=lambda mode, q, v, z: consistent_mode(drive._watched, mode, q, z))

@@ -18,7 +18,7 @@ from .kinds import level as LV
 from .kinds import spool as SP
 from .kinds._flow import SOURCE, TARGET
 
-__all__ = ["Watch", "border_tests", "pressure_margins", "watched"]
+__all__ = ["Watch", "border_tests", "consistent_mode", "pressure_margins", "watched"]
 
 #: the preset's accumulator's and relief's event and border names
 ACC, REL = "accumulator", "relief"
@@ -150,6 +150,53 @@ def watched(net, events, own=()) -> tuple:
     watches = [Watch(events[slot], slot, level, kind, node, f, form, force)
                for slot, level, kind, node, f, form, force in out]
     return tuple(sorted((w for w in watches if w.name not in own), key=lambda w: w.slot))
+
+
+def consistent_mode(watches, mode, q, z) -> tuple:
+    """The drive's ``mode`` with each watched level's flag (a level's, an accumulator's, a relief's:
+    not a spool's stop, whose rest the state alone does not say) turned where the state ``(q, z)``
+    lies strictly on the other side of its level than the flag says (theory §11, *Parts of a
+    drill's circuit*). On the level itself the flag stands (the event function is moved off 0 to
+    its side: :func:`.kinds.level._off_level`), and after an event the state is on its flag's side:
+    only a mode given apart from the state changes, a periodic orbit's block's, fixed from the guess
+    while the parameters move its state across a level. Without this, a check valve's full opening
+    reached before the impact at the guess and no longer at the block's state kept its flag "open"
+    while the pressure drop was below it: its falling crossing, watched from above, never came, and
+    where the cracking level was passed next the flags chose the opening's rising piece far below
+    its range (an opening of -13,000 by the time the supply's pressure passed the relief's
+    setting, and CVODE's convergence failures).
+
+    Parameters
+    ----------
+    watches : tuple of Watch
+        The drive's (:func:`watched`).
+    mode : tuple
+        The drive's mode (a watch's flag its ``1 + slot``).
+    q, z : numpy.ndarray
+        The modal displacements (model units) and the circuit's state.
+
+    Returns
+    -------
+    tuple
+        ``mode`` itself where every flag agrees with the state, else the mode with those turned.
+
+    Examples
+    --------
+    >>> w = Watch("check_open", 1, 2.0, NW.LEVEL, None, lambda q, z: z[0] - z[1])
+    >>> consistent_mode((w,), (0, 0, 1), None, [2.5, 1.0]), consistent_mode((w,), (0, 0, 1), None, [3.5, 1.0])
+    ((0, 0, 0), (0, 0, 1))
+    >>> consistent_mode((w,), (0, 0, 0), None, [3.0, 1.0])  # (on the level: the flag stands)
+    (0, 0, 0)
+    """
+    out = None
+    for w in watches:
+        if w.kind == NW.SPOOL:
+            continue
+        i, x = 1 + w.slot, w.quantity(q, z)
+        if (x < w.level) if mode[i] else (x > w.level):
+            out = list(mode) if out is None else out
+            out[i] = 1 - mode[i]
+    return mode if out is None else tuple(out)
 
 
 def _along(piece, form, rates: bool = True):
