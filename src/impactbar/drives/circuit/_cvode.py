@@ -26,6 +26,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from . import _sundials as S
 from ._dop853 import keep_row
@@ -167,6 +168,10 @@ def _block_solve(data, n, ldim, smu, x, n_energy, m):
         start = 0 if c == 0 else n + n_energy + (c - 1) * n
         for i in range(n):
             x[start + i] = B[i, c]
+
+
+# the C callbacks below call them (compiled at their definition): link-only, their machine code the callbacks'
+internal_kernels(globals(), from_python="compile")
 
 
 @nb.cfunc(_c(_p, _p), cache=CACHE)

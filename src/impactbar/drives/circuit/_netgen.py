@@ -133,6 +133,7 @@ from impactbar.drives.circuit.kinds import spool as KIND_spool
 from impactbar.drives.circuit.kinds import spool_port as KIND_spool_port
 from impactbar.drives.circuit.kinds._flow import dphi, phi
 from impactbar.drives.circuit.kinds.level import _off_level
+from impactbar._shared.wrappers import internal_kernels
 from impactbar.dynamics.compiled import CACHE
 
 _JIT = dict(cache=CACHE and not globals().get("_IN_MEMORY", False), nogil=True, error_model="numpy")
@@ -218,7 +219,13 @@ def magnus_phi(t, y, f, par, M, theta, d):
         t0 += h
         steps += 1
     return unscale(Phi, d), steps
+'''
 
+_CALLBACKS = '''
+# -- the kernels that only kernels call: link-only (compiled again from Python, where a test calls one);
+# before the C callbacks, which compile at their definition --
+internal_kernels(globals(), python=("jac_base", "field_at", "magnus_phi", "dop853_fly"),
+                 from_python="compile")
 
 CALLBACKS = None
 try:
@@ -623,7 +630,7 @@ def emit(net) -> str:
     t = _Topology(net)
     parts = ["\n".join(f(t)) + "\n" for f in (_base, _jac, _events, lambda t: _jac(t, True))]
     flight = _FLIGHT.format(ns=t.ns, nen=t.nen, nev=_bar.RAMP_EV + t.nev, net=NW_SIZE + REC_SIZE * t.nrec)
-    return "\n\n".join([_HEADER.format(callees=_callees())] + parts) + flight + _dop853.SOURCE
+    return "\n\n".join([_HEADER.format(callees=_callees())] + parts) + flight + _dop853.SOURCE + _CALLBACKS
 
 
 def _folder():
