@@ -223,7 +223,7 @@ def magnus_phi(t, y, f, par, M, theta, d):
 
 _CALLBACKS = '''
 # -- the kernels that only kernels call: link-only (compiled again from Python, where a test calls one);
-# before the C callbacks, which compile at their definition --
+# then CVODE's C callbacks, each compiled at its first use (_cvode.Callback) --
 internal_kernels(globals(), python=("jac_base", "field_at", "magnus_phi", "dop853_fly"),
                  from_python="compile")
 
@@ -243,14 +243,14 @@ if CV is not None:
         n = 2 * M + NS + 1
         return M, n + NEN + (n * n if par[VAR] > 0.5 else 0)
 
-    @nb.cfunc(_c(_d, _p, _p, _dp), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _p, _dp), cache=_JIT["cache"])
     def rhs_c(t, y, yp, user_data):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
         flight_rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
         return 0
 
-    @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
     def jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
@@ -258,7 +258,7 @@ if CV is not None:
         flight_jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
         return 0
 
-    @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
     def jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
@@ -268,7 +268,7 @@ if CV is not None:
         _band_blocks(A, J, N, NEN)
         return 0
 
-    @nb.cfunc(_c(_d, _p, _dp, _dp), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _dp, _dp), cache=_JIT["cache"])
     def events_c(t, y, g, user_data):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
