@@ -30,8 +30,8 @@ KERNELS = {
     "rod and rock orbits, exact blows": 16,
     "rod and rock orbits, lattice": 24,
     "rigid sweep chunks": 27,
-    "oil circuit": 82,
-    "oil circuit on rod and rock": 24,
+    "oil circuit": 90,
+    "oil circuit on rod and rock": 25,
     "piston optimiser": 11,
 }
 
