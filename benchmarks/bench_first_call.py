@@ -49,12 +49,13 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-_CHILD = r"""
+#: the child's listener of numba's compiles (also ``probes/circuit_first_compiles.py``'s): each kernel's
+#: own CPU time in ``own``, its compiles in ``count``, by ``name``
+_LISTENER = r"""
 import json, sys, time
 from collections import defaultdict
 from numba.core import event
 
-row, root, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 own, count, stack = defaultdict(float), defaultdict(int), []
 
 
@@ -76,6 +77,10 @@ class Listener(event.Listener):  # each kernel's compile time, its callees' comp
 
 
 event.register("numba:compile", Listener())
+"""
+
+_CHILD = _LISTENER + r"""
+row, root, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 out = {}
 
 

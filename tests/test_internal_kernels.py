@@ -52,6 +52,26 @@ def test_an_internal_kernel_computes_for_its_caller_and_refuses_python():
 def test_internal_kernels_names_only_the_modules_kernels():
     with pytest.raises(ValueError, match="python"):
         internal_kernels(_kernels(), python=("root_sum", "nothing"))
+    with pytest.raises(ValueError, match="from_python"):
+        internal_kernels(_kernels(), from_python="twin")
+
+
+def test_a_link_only_kernel_called_from_python_compiles_a_kernel_of_its_own():
+    """With ``from_python="compile"`` the callee stays link-only for its caller (no machine code of its
+    own there) and a call from Python compiles it once more, whole, with the caller's numbers."""
+    ns = _kernels()
+    assert internal_kernels(ns, python=("root_sum",), from_python="compile") == 1
+    a, b = np.array([3.0, 1.0, 2.0]), np.array([0.5, -4.0])
+    assert ns["root_sum"]((a, b)) == math.sqrt(ns["norm2"](a) + ns["norm2"](b))
+    assert ns["norm2"](a) == 14.0 and ns["norm2"](b) == 16.25  # (exact sums of squares)
+    (own,) = ns["norm2"].overloads.values()
+    whole = ns["norm2"]._impactbar_whole
+    (mine,) = whole.overloads.values()
+    jit = own.library.codegen._engine._ee
+    assert own.library._final_module not in jit._modules  # (link-only still, for root_sum)
+    assert mine.library._final_module in jit._modules  # (the kernel Python called: its machine code)
+    ns["norm2"](b)
+    assert ns["norm2"]._impactbar_whole is whole and len(whole.overloads) == 1  # (made once)
 
 
 _MODULE = '''

@@ -11,7 +11,10 @@ kernel's library runs. :func:`internal_kernels` compiles a module's kernels that
 optimise it with their own and make its machine code; they get no machine code, no wrappers and no
 cache entry of their own (a cached caller holds their machine code; a caller compiled later compiles
 them again). The kernels Python calls keep their Python wrapper and their cache entry. A link-only
-kernel cannot be called from Python: such a call raises :class:`TypeError`.
+kernel cannot be called from Python: such a call raises :class:`TypeError`; or, with
+``from_python="compile"``, it compiles the kernel again as a whole kernel of its own (its machine code,
+wrappers and cache entry), once, and calls that: for kernels that Python calls only outside the paths
+that compile them for their callers (tests, benchmarks, a rarely taken branch).
 
 All of a module's kernels also count references *leanly*: numba increments and decrements the
 reference counts of an array, a tuple of arrays, ... by walking every field of the value and reading
@@ -32,16 +35,38 @@ _GUARDED: dict = {}
 _CLASSES: dict = {}
 
 
-def _guarded_class(cls):
-    """A subclass of the dispatcher class ``cls`` whose instances refuse a call from Python."""
-    if cls not in _GUARDED:
-        def __call__(self, *args, **kwargs):
-            raise TypeError(f"{self.py_func.__module__}.{self.py_func.__name__} is a numba kernel "
-                            "compiled without its Python wrapper: call it from another kernel")
+def _guarded_class(cls, compile_for_python: bool = False):
+    """A subclass of the dispatcher class ``cls`` whose instances refuse a call from Python, or, with
+    ``compile_for_python``, call their whole kernel (:func:`_whole_kernel`)."""
+    key = (cls, compile_for_python)
+    if key not in _GUARDED:
+        if compile_for_python:
+            def __call__(self, *args, **kwargs):
+                return _whole_kernel(self)(*args, **kwargs)
+        else:
+            def __call__(self, *args, **kwargs):
+                raise TypeError(f"{self.py_func.__module__}.{self.py_func.__name__} is a numba kernel "
+                                "compiled without its Python wrapper: call it from another kernel")
 
-        _GUARDED[cls] = type("Internal" + cls.__name__, (cls,), {"__call__": __call__,
-                                                                  "__module__": __name__})
-    return _GUARDED[cls]
+        prefix = "PythonCompiled" if compile_for_python else "Internal"
+        _GUARDED[key] = type(prefix + cls.__name__, (cls,), {"__call__": __call__, "__module__": __name__})
+    return _GUARDED[key]
+
+
+def _whole_kernel(disp):
+    """The link-only kernel ``disp``'s function as a whole kernel of its own (made once): its options,
+    with its Python wrapper, machine code and (where ``disp`` had one) cache entry; its callees are
+    ``disp``'s (link-only ones linked into its library)."""
+    whole = disp.__dict__.get("_impactbar_whole")
+    if whole is None:
+        import numba
+
+        options = {k: v for k, v in disp.targetoptions.items()
+                   if k not in ("no_cpython_wrapper", "no_cfunc_wrapper", "nopython")}
+        whole = numba.njit(cache=disp.__dict__["_impactbar_cached"], **options)(disp.py_func)
+        whole._compiler.pipeline_class = _link_only_classes()["lean"]
+        disp._impactbar_whole = whole
+    return whole
 
 
 class _NoEnv:
@@ -161,7 +186,7 @@ def _link_only_classes():
     return _CLASSES
 
 
-def internal_kernels(namespace: dict, python=()) -> int:
+def internal_kernels(namespace: dict, python=(), from_python: str = "raise") -> int:
     """Compile a module's numba kernels that only kernels call link-only, the others without a C wrapper,
     all with the lean counting of references.
 
@@ -173,7 +198,11 @@ def internal_kernels(namespace: dict, python=()) -> int:
     python : iterable of str, optional
         The names of the module's kernels that Python calls: they keep their Python wrapper, machine
         code and cache entry. The others are link-only (no machine code, wrappers or cache entry of
-        their own), and a call of one from Python raises :class:`TypeError`.
+        their own), and a call of one from Python does as ``from_python`` says.
+    from_python : {"raise", "compile"}, optional
+        What a call of a link-only kernel from Python does: raise :class:`TypeError` (the default),
+        or compile the kernel's function again as a kernel of its own, once (its wrappers, machine
+        code and cache entry), and call that, with the same numbers.
 
     Returns
     -------
@@ -183,7 +212,8 @@ def internal_kernels(namespace: dict, python=()) -> int:
     Raises
     ------
     ValueError
-        If ``python`` names something that is not one of the module's kernels.
+        If ``python`` names something that is not one of the module's kernels, or ``from_python`` is
+        neither ``"raise"`` nor ``"compile"``.
 
     Examples
     --------
@@ -204,6 +234,8 @@ def internal_kernels(namespace: dict, python=()) -> int:
     """
     from numba.core.caching import NullCache
 
+    if from_python not in ("raise", "compile"):
+        raise ValueError(f"from_python must be 'raise' or 'compile', not {from_python!r}")
     name = namespace.get("__name__")
     ours = module_kernels(namespace)
     python = set(python)
@@ -219,7 +251,8 @@ def internal_kernels(namespace: dict, python=()) -> int:
         if k not in python:
             disp.targetoptions["no_cpython_wrapper"] = True
             disp._compiler.pipeline_class = compiler
+            disp._impactbar_cached = not isinstance(disp._cache, NullCache)
             disp._cache = NullCache()
-            disp.__class__ = _guarded_class(type(disp))
+            disp.__class__ = _guarded_class(type(disp), from_python == "compile")
             n += 1
     return n

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numba as nb
 
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 
 __all__ = ["end_motion", "bar_events", "phi_rate", "jac_blocks"]
@@ -101,3 +102,6 @@ def bar_events(y, par, M, g):
     g[ARRIVAL_EV] = s
     g[OUT_EV] = -y[0] - par[XOUT] if par[ARMO] > 0.5 else 1.0
     g[IN_EV] = -y[0] - par[XIN] if par[ARMI] > 0.5 else 1.0
+
+
+internal_kernels(globals(), from_python="compile")  # the generated kernels call them: link-only

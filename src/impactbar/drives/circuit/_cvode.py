@@ -26,6 +26,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from . import _sundials as S
 from ._dop853 import keep_row
@@ -33,8 +34,8 @@ from ._dop853 import keep_row
 if not S.bind():  # pragma: no cover - imported only where available (flight.py)
     raise ImportError(f"CVODE cannot be driven from compiled code here: {S.reason()}")
 
-__all__ = ["fly", "fly_split", "workspace", "last_workspace", "Workspace", "CV_ROOT_RETURN",
-           "CV_TSTOP_RETURN", "CV_TOO_MUCH_WORK"]
+__all__ = ["fly", "fly_split", "workspace", "last_workspace", "Workspace", "Callback", "callback",
+           "CV_ROOT_RETURN", "CV_TSTOP_RETURN", "CV_TOO_MUCH_WORK"]
 
 CV_ADAMS, CV_BDF, CV_ONE_STEP = 1, 2, 2
 CV_SUCCESS, CV_TSTOP_RETURN, CV_ROOT_RETURN, CV_TOO_MUCH_WORK = 0, 1, 2, -1
@@ -64,6 +65,48 @@ _stop_time = _ext("CVodeSetStopTime", _c(_p, _d))
 _clear_stop = _ext("CVodeClearStopTime", _c(_p))
 _step = _ext("CVode", _c(_p, _d, _p, _p, _c))
 _root_info = _ext("CVodeGetRootInfo", _c(_p, _p))
+
+
+class Callback:
+    """A C callback (:func:`numba.cfunc`) compiled where its :attr:`address` is first read (a flight's
+    workspace: :class:`Workspace`), not where it is defined: a flight that takes one Jacobian (the
+    dense one or the band one) compiles only that one.
+
+    Parameters
+    ----------
+    signature : numba signature
+        The C signature, as :func:`numba.cfunc` takes it.
+    pyfunc : callable
+        The callback's Python function.
+    cache : bool
+        Whether numba caches its machine code.
+    """
+
+    def __init__(self, signature, pyfunc, cache: bool):
+        self._args = (signature, pyfunc, bool(cache))
+        self._cfunc = None
+        self._lock = threading.Lock()
+
+    @property
+    def address(self) -> int:
+        """The compiled callback's address (compiled, or loaded from numba's cache, on first use)."""
+        if self._cfunc is None:
+            with self._lock:
+                if self._cfunc is None:
+                    signature, pyfunc, cache = self._args
+                    self._cfunc = nb.cfunc(signature, cache=cache)(pyfunc)
+        return self._cfunc.address
+
+    @property
+    def cfunc(self):
+        """numba's compiled callback (:class:`numba.core.ccallback.CFunc`), ``None`` before first use."""
+        return self._cfunc
+
+
+def callback(signature, cache: bool = CACHE):
+    """Decorator: the function as a :class:`Callback` of the C signature ``signature`` (compiled on
+    first use; numba's cache as ``cache`` says)."""
+    return lambda pyfunc: Callback(signature, pyfunc, cache)
 
 
 _LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it is int or int64_t
@@ -167,6 +210,10 @@ def _block_solve(data, n, ldim, smu, x, n_energy, m):
         start = 0 if c == 0 else n + n_energy + (c - 1) * n
         for i in range(n):
             x[start + i] = B[i, c]
+
+
+# the C callbacks below call them (compiled at their definition): link-only, their machine code the callbacks'
+internal_kernels(globals(), from_python="compile")
 
 
 @nb.cfunc(_c(_p, _p), cache=CACHE)

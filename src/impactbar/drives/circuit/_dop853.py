@@ -36,6 +36,7 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _co
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 
 __all__ = ["SOURCE", "compile_driver", "DOP853_TOO_MUCH_WORK", "DOP853_TOO_SMALL_STEP", "MESSAGES",
@@ -489,3 +490,4 @@ def compile_driver(rhs, events):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (keep_row's row 0)
+internal_kernels(globals(), from_python="compile")  # kernels call them (the flights' loops): link-only

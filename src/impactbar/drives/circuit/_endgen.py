@@ -44,6 +44,7 @@ import numba as nb
 import numpy as np
 
 from impactbar.drives.circuit._bar import ALPHA
+from impactbar._shared.wrappers import internal_kernels
 from impactbar.drives.circuit._endgen import EXT_A, EXT_IZ
 from impactbar.dynamics.compiled import CACHE
 
@@ -161,6 +162,10 @@ def end_tangent_at(ys, par, ext, J, fa):
             for j in range(1 + NZ):
                 J[r, i, j] = JJ[i, j]
 
+
+# the kernels that only kernels call (the C callbacks below, compiled at their definition; end_rhs, end_jac
+# and end_events from Python only where scikit-sundae's interface flies): link-only
+internal_kernels(globals(), python=("end_field_at", "end_tangent_at"), from_python="compile")
 
 CALLBACKS = SPLINE_CALLBACKS = fly_intervals = None
 try:

@@ -48,6 +48,7 @@ import numba as nb
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 
 __all__ = ["expm", "magnus_exp", "magnus_step", "scales", "state_at", "unscale", "DEFAULT_THETA", "balance"]
@@ -301,3 +302,4 @@ def balance(jac_base, y, par, M, n) -> np.ndarray:
 GAUSS1 = _G1
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (state_at's k = 0)
+internal_kernels(globals(), from_python="compile")  # kernels call them (the generated magnus_phi): link-only

@@ -133,6 +133,7 @@ from impactbar.drives.circuit.kinds import spool as KIND_spool
 from impactbar.drives.circuit.kinds import spool_port as KIND_spool_port
 from impactbar.drives.circuit.kinds._flow import dphi, phi
 from impactbar.drives.circuit.kinds.level import _off_level
+from impactbar._shared.wrappers import internal_kernels
 from impactbar.dynamics.compiled import CACHE
 
 _JIT = dict(cache=CACHE and not globals().get("_IN_MEMORY", False), nogil=True, error_model="numpy")
@@ -218,7 +219,13 @@ def magnus_phi(t, y, f, par, M, theta, d):
         t0 += h
         steps += 1
     return unscale(Phi, d), steps
+'''
 
+_CALLBACKS = '''
+# -- the kernels that only kernels call: link-only (compiled again from Python, where a test calls one);
+# then CVODE's C callbacks, each compiled at its first use (_cvode.Callback) --
+internal_kernels(globals(), python=("jac_base", "field_at", "magnus_phi", "dop853_fly"),
+                 from_python="compile")
 
 CALLBACKS = None
 try:
@@ -236,14 +243,14 @@ if CV is not None:
         n = 2 * M + NS + 1
         return M, n + NEN + (n * n if par[VAR] > 0.5 else 0)
 
-    @nb.cfunc(_c(_d, _p, _p, _dp), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _p, _dp), cache=_JIT["cache"])
     def rhs_c(t, y, yp, user_data):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
         flight_rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
         return 0
 
-    @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
     def jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
@@ -251,7 +258,7 @@ if CV is not None:
         flight_jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
         return 0
 
-    @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=_JIT["cache"])
     def jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
@@ -261,7 +268,7 @@ if CV is not None:
         _band_blocks(A, J, N, NEN)
         return 0
 
-    @nb.cfunc(_c(_d, _p, _dp, _dp), cache=_JIT["cache"])
+    @CV.callback(_c(_d, _p, _dp, _dp), cache=_JIT["cache"])
     def events_c(t, y, g, user_data):
         M, N = _sizes(user_data)
         par = nb.carray(user_data, HEAD + 3 * M + NET)
@@ -623,7 +630,7 @@ def emit(net) -> str:
     t = _Topology(net)
     parts = ["\n".join(f(t)) + "\n" for f in (_base, _jac, _events, lambda t: _jac(t, True))]
     flight = _FLIGHT.format(ns=t.ns, nen=t.nen, nev=_bar.RAMP_EV + t.nev, net=NW_SIZE + REC_SIZE * t.nrec)
-    return "\n\n".join([_HEADER.format(callees=_callees())] + parts) + flight + _dop853.SOURCE
+    return "\n\n".join([_HEADER.format(callees=_callees())] + parts) + flight + _dop853.SOURCE + _CALLBACKS
 
 
 def _folder():

@@ -59,7 +59,28 @@ from .settings import DEFAULT_SETTINGS, CircuitFlightSettings, circuit_settings
 
 __all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS",
            "EXPLICIT_STIFFNESS", "EXPLICIT_TOLERANCE", "magnus_state_settings", "uses_magnus", "uses_dop853",
-           "spectrum", "keep_spacing", "last_integrator"]
+           "spectrum", "keep_spacing", "last_integrator", "compile_callbacks"]
+
+
+def compile_callbacks() -> int:
+    """Compile (or load from numba's cache) the C callbacks of every flight's generated module loaded in
+    this process (:mod:`._netgen`), those no flight has used yet too: each compiles at its first use
+    (:class:`._cvode.Callback`), so that ``impactbar warmup`` compiles the Jacobian its flights did not
+    take here, and a later process compiles nothing.
+
+    Returns
+    -------
+    int
+        How many callbacks (compiled, loaded or already there).
+    """
+    from . import _netgen
+
+    n = 0
+    for module in list(_netgen._MEMO.values()):
+        for cb in (getattr(module, "CALLBACKS", None) or ())[:-1]:
+            cb.address  # noqa: B018  (the address: compiled on first use)
+            n += 1
+    return n
 
 
 class HermiteSteps:
