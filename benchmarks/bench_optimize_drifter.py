@@ -69,6 +69,11 @@ def _multistart_summary(res) -> None:
           f"{sum(r.get('seconds', 0.0) for r in res.history):.1f} s (each design's own time); certificate "
           f"{cert.verdict if cert is not None else 'none'}"
           f"{f' (KKT residual {cert.residual:.3g})' if cert is not None else ''}; gain {res.gain:+.2%}")
+    scored = [r["border"] for r in failed if "border" in r]  # (the border model's; none on a tree without)
+    print(f"border model: {len(scored)} of the {len(failed)} scored by their nearest success's "
+          f"extrapolation ({sum(b['located'] == 'margin' for b in scored)} located by the multiplier's "
+          f"margin, the others at a border radius), from {len({b['nearest'] for b in scored})} successes' "
+          "gradients")
     from impactbar.physical.optimize_multistart import found_table
 
     print(found_table(res.found, res.vary, OBJECTIVES[res.objective][0]))
@@ -156,6 +161,8 @@ def main(argv=None) -> None:
     p.add_argument("--sample", type=int, default=256)
     p.add_argument("--local-starts", type=int, default=3)
     p.add_argument("--workers", type=int, default=None)
+    p.add_argument("--polish", type=int, default=12, help="multistart: the polish's most designs (0: none)")
+    p.add_argument("--seed", type=int, default=0, help="multistart: the sample's seed")
     p.add_argument("--quick", action="store_true", help="multistart on two variables, a sample of 8")
     p.add_argument("--against", metavar="REF", help="the same search on the git ref REF (e.g. 15d5b20) or a "
                    "tree's src folder, side by side")
@@ -184,7 +191,8 @@ def main(argv=None) -> None:
         res = optimize_drifter(EXAMPLE, vary, objective="drilling_rate_per_kW", constraints=constraints,
                                max_evaluations=args.max_evaluations, cache=args.cache, method=args.method,
                                popsize=args.popsize, progress=False, workers=args.workers,
-                               **({"sample": args.sample, "local_starts": args.local_starts}
+                               **({"sample": args.sample, "local_starts": args.local_starts,
+                                   "seed": args.seed, "polish": args.polish}
                                   if args.method == "multistart" else {}))
     cpu = time.process_time() - c0
     wall = time.perf_counter() - t
