@@ -97,8 +97,9 @@ def test_central_differences_of_fresh_orbits_confirm_the_certificate(searched):
     """The KKT residual again from central differences of fresh orbits, not the certificate's
     gradients: at a step of 1e-5 of the spans (a fresh orbit's figures to some 1e-9: the differences
     to some 1e-4 of the gradient) below the tolerance, the objective's gradient within 1 % of the
-    certificate's. Measured at the bench's design before the border model: 0.0079 at 1e-5 (the gradients agree to 1e-4), 0.022
-    at 1e-4, 0.058 at 1e-3, the difference all in the front rod's derivative."""
+    certificate's. Measured at the bench's design before the border model: 0.0079 at 1e-5 (the
+    gradients agree to 1e-4), 0.022 at 1e-4, 0.058 at 1e-3, the difference all in the front rod's
+    derivative."""
     res, cfg, folder = searched
     cert = res.certificate
     fresh, _ = evaluate_design(build(with_values(cfg, res.optimum["changes"]), folder), CONSTRAINTS)
