@@ -3,8 +3,9 @@ design without a one-impact orbit: as the far side of a border, located from the
 nearest design that has one, not as a penalty (theory §11, "Optimising a drifter").
 
 A design :math:`u_f` (the variables scaled to :math:`[0, 1]`) where the orbit is not found is scored
-from the nearest design :math:`u_s` evaluated with an orbit (the design its Newton started from:
-:class:`~impactbar.physical.optimize_cache.OrbitChain`'s) by that design's first-order model, the
+from the nearest design :math:`u_s` evaluated with an orbit (one continued along
+:class:`~impactbar.physical.optimize_cache.OrbitChain`, or a multistart sample's, whose gradient then
+starts from a fresh orbit) by that design's first-order model, the
 implicit function theorem's gradients of its figures
 (:func:`~impactbar.physical.sensitivity.tangent_derivatives`, one gradient per design, kept):
 
@@ -18,8 +19,9 @@ orbit :math:`e` is its existence margin, the largest Floquet multiplier's modulu
 :math:`1 - |\mu|_{max}` (scaled as the ``max_multiplier`` constraint's margin, whose scale is 1): the
 orbit is lost where a multiplier leaves the unit circle (a fold, a period
 doubling: the period-2 motions the failed designs settle into), as a design map's border is located,
-where its margin extrapolates to zero (:meth:`~impactbar.physical.sensitivity.
-OperatingPointSensitivities.distance_to_border`). At the failed design the border lies on the segment
+where its margin extrapolates to zero
+(:meth:`~impactbar.physical.sensitivity.OperatingPointSensitivities.distance_to_border`). At the
+failed design the border lies on the segment
 from :math:`u_s` at :math:`t^* = -e_s / (\nabla e_s \cdot d)` where that is in :math:`(0, 1)`, and
 :math:`e(u_f) = e_s + \nabla e_s \cdot d = e_s (1 - 1/t^*) < 0`, the margin's own extrapolation;
 where it is not (the margin does not reach zero before :math:`u_f`: the orbit ends otherwise, at a
