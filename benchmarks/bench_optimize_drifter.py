@@ -59,6 +59,36 @@ QUICK = ("valve.switch_out", "accumulator.precharge")
 CONSTRAINTS = {"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}
 
 
+@contextlib.contextmanager
+def _phases():
+    """The wall seconds of the multistart's phases: the sample's designs computed together
+    (``compute_new``, on the workers) and the polish (``polish_search``); the local searches and the
+    rest (the fresh re-evaluation, the certificate) are the call's wall time less those."""
+    import impactbar.physical.optimize_multistart as multistart
+
+    module = inspect.getmodule(optimize_drifter)
+    walls = {"sample": 0.0, "polish": 0.0}
+    saved = [(multistart, "compute_new", "sample"), (module, "polish_search", "polish")]
+
+    def timed(fn, phase):
+        def wrapper(*args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                walls[phase] += time.perf_counter() - t0
+        return wrapper
+
+    kept = [(m, n, phase, getattr(m, n)) for m, n, phase in saved if hasattr(m, n)]
+    for m, n, phase, fn in kept:
+        setattr(m, n, timed(fn, phase))
+    try:
+        yield walls
+    finally:
+        for m, n, _, fn in kept:
+            setattr(m, n, fn)
+
+
 def _multistart_summary(res) -> None:
     """The multistart's designs, its failures and their cost, the certificate, the gain, each local
     search's best design."""
@@ -69,6 +99,11 @@ def _multistart_summary(res) -> None:
           f"{sum(r.get('seconds', 0.0) for r in res.history):.1f} s (each design's own time); certificate "
           f"{cert.verdict if cert is not None else 'none'}"
           f"{f' (KKT residual {cert.residual:.3g})' if cert is not None else ''}; gain {res.gain:+.2%}")
+    scored = [r["border"] for r in failed if "border" in r]  # (the border model's; none on a tree without)
+    print(f"border model: {len(scored)} of the {len(failed)} scored by their nearest success's "
+          f"extrapolation ({sum(b['located'] == 'margin' for b in scored)} located by the multiplier's "
+          f"margin, the others at a border radius), from {len({b['nearest'] for b in scored})} successes' "
+          "gradients")
     from impactbar.physical.optimize_multistart import found_table
 
     print(found_table(res.found, res.vary, OBJECTIVES[res.objective][0]))
@@ -156,6 +191,8 @@ def main(argv=None) -> None:
     p.add_argument("--sample", type=int, default=256)
     p.add_argument("--local-starts", type=int, default=3)
     p.add_argument("--workers", type=int, default=None)
+    p.add_argument("--polish", type=int, default=12, help="multistart: the polish's most designs (0: none)")
+    p.add_argument("--seed", type=int, default=0, help="multistart: the sample's seed")
     p.add_argument("--quick", action="store_true", help="multistart on two variables, a sample of 8")
     p.add_argument("--against", metavar="REF", help="the same search on the git ref REF (e.g. 15d5b20) or a "
                    "tree's src folder, side by side")
@@ -180,11 +217,12 @@ def main(argv=None) -> None:
     t = time.perf_counter()
     constraints = {**CONSTRAINTS, "min_drilling_rate": None} if args.any_rate else CONSTRAINTS
     c0 = time.process_time()
-    with _timed_designs() as calls:
+    with _timed_designs() as calls, _phases() as walls:
         res = optimize_drifter(EXAMPLE, vary, objective="drilling_rate_per_kW", constraints=constraints,
                                max_evaluations=args.max_evaluations, cache=args.cache, method=args.method,
                                popsize=args.popsize, progress=False, workers=args.workers,
-                               **({"sample": args.sample, "local_starts": args.local_starts}
+                               **({"sample": args.sample, "local_starts": args.local_starts,
+                                   "seed": args.seed, "polish": args.polish}
                                   if args.method == "multistart" else {}))
     cpu = time.process_time() - c0
     wall = time.perf_counter() - t
@@ -205,6 +243,9 @@ def main(argv=None) -> None:
           + f"; gain {done['gain %']:+.2f} %")
     if args.method == "multistart":
         _multistart_summary(res)
+        print(f"wall time by phase ({args.workers or 'no'} workers): the sample {walls['sample']:.0f} s, the "
+              f"polish {walls['polish']:.0f} s, the local searches and the rest "
+              f"{wall - walls['sample'] - walls['polish']:.0f} s")
     if args.out:
         res.to_json(args.out)
 

@@ -7,8 +7,14 @@ continued from the nearest design evaluated so far (Newton from its orbit) where
 the default chain. The search is derivative-free by default (COBYLA, :func:`scipy.optimize.minimize`)
 over the variables scaled to :math:`[0, 1]` by their bounds: an operating point changes pattern (the
 valve's switch before or after the impact, the relief opening or not) at borders where it is not
-smooth, and an evaluation can fail (no orbit, cavitation), which a penalty, not a finite difference,
-handles. With ``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
+smooth, and an evaluation can fail (no orbit, cavitation). A design without an orbit is scored as the
+far side of a border, not by a penalty (:mod:`~impactbar.physical.optimize_border`): by the first-order
+extrapolation of the nearest design evaluated with one (its implicit-function-theorem gradients, one
+per success, kept), and a constraint more, "the one-impact orbit exists", the existence margin (the
+largest Floquet multiplier's modulus to the unit circle), negative there, its zero where that margin
+extrapolates to zero, as a design map locates a border (else at a radius from the success); only in
+the circuit's ideal limit, with no orbit to extrapolate, is a failed design objective 1 and every
+constraint -1. With ``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
 the constraints by the implicit function theorem on each design's orbit
 (:func:`~impactbar.physical.sensitivity.tangent_derivatives`: four flights per variable, no orbit
 solved), a key across a border within the step by central differences of orbits continued from the
@@ -54,11 +60,12 @@ from .display_units import written_quantity
 from .drifter import Drifter
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
+from .optimize_border import EXISTENCE, border_score, existence_margin
 from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
 from .optimize_failures import classify_listed, failed_record
 from .optimize_integers import integer_search
 from .optimize_multistart import check_multistart, multistart_search
-from .optimize_outputs import piston_and_multipliers, shank_stress
+from .optimize_outputs import constraint_output, piston_and_multipliers, shank_stress
 from .optimize_polish import polish_search
 from .optimize_population import check_population, penalised, population_search
 from .optimize_problem import (
@@ -409,15 +416,52 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         first = check_start(evaluate(u0), any_start)
         ref = abs(first["objectives"][fkey]) or 1.0
 
+        # a design without an orbit scored by the border model (optimize_border): the nearest success's
+        # first-order extrapolation, and the existence constraint negative there (a penalty, objective 1
+        # and every constraint -1, only where no design has an orbit to extrapolate: the ideal limit)
+        scale = constraint_output("max_multiplier", kind).scale or abs(limits.get("max_multiplier", 0.95))
+
+        def border(rec: dict) -> dict | None:
+            """A failed design's scores by the border model, kept in its record (``None``: no design
+            with an orbit, the ideal limit's): from the nearest design evaluated with an orbit (a
+            sample's too, its gradient then from a fresh orbit)."""
+            if "border" not in rec and not ideal:
+                u = points[rec["id"]]
+                success = min((r for r in history if r["ok"]),
+                              key=lambda r: float(np.sum((points[r["id"]] - u) ** 2)))
+                nid, at = success["id"], points[success["id"]]
+                if kind == "circuit":  # (a valve drifter's figures have no such gradients: held)
+                    grad = derivative(at)
+                    d_exists = grad.constraints[list(limits).index("max_multiplier")] if (
+                        "max_multiplier" in limits) else None
+                else:
+                    grad, d_exists = _Gradients(np.zeros(len(keys)), np.zeros((len(limits), len(keys)))), None
+                radius = min((r["border"]["radius"] for r in history if "radius" in r.get("border", {})
+                              and r["border"]["nearest"] == nid), default=math.inf)
+                s = border_score(u, at, success["objectives"][fkey], [c["scaled"] for c in success[
+                    "constraints"].values()], existence_margin(success, scale), *grad, d_exists, radius)
+                rec["border"] = {"nearest": nid, "objective": s.objective, "margins": s.margins.tolist(),
+                                 EXISTENCE: s.exists, "t": s.t, "located": s.located,
+                                 **({"radius": s.radius} if s.located == "radius" else {})}
+            return rec.get("border")
+
         def f(u):
             rec = evaluate(u)
-            return -rec["objectives"][fkey] / ref if rec["ok"] else 1.0
+            if rec["ok"]:
+                return -rec["objectives"][fkey] / ref
+            return 1.0 if border(rec) is None else -rec["border"]["objective"] / ref
 
         def g(u):
             rec = evaluate(u)
-            if not rec["ok"]:
-                return -np.ones(len(limits))
-            return np.array([c["scaled"] for c in rec["constraints"].values()])
+            if rec["ok"]:
+                return np.array([c["scaled"] for c in rec["constraints"].values()])
+            return -np.ones(len(limits)) if border(rec) is None else np.array(rec["border"]["margins"])
+
+        def exists(u):  # the constraint "the one-impact orbit exists" (optimize_border)
+            rec = evaluate(u)
+            if rec["ok"]:  # (met: an orbit past the unit circle exists too, at 0)
+                return max(existence_margin(rec, scale), 0.0)
+            return -1.0 if border(rec) is None else rec["border"][EXISTENCE]
 
         def gradient_of(u, kind, compute):
             """A design's gradients: computed once per design and kind, kept in the cache file (a run
@@ -440,7 +484,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                         write_cache(cache_path, tag, store, stored_gradients)
             return gradients[key]
 
-        def derivative(u):
+        def derivative(u):  # (a failed design's: its nearest success's, the border model's gradient)
+            rec = evaluate(u)
+            if not rec["ok"] and border(rec) is not None:
+                u = points[rec["border"]["nearest"]]
             return gradient_of(u, "default", _design_gradient)
 
         def refined(u):  # the polish's: the step refined where it meets a border (_refined_gradient)
@@ -453,8 +500,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                                     maxiter=maxiter, seed=seed, workers=workers, atol=tol ** 2)
         elif method in ("cobyla", "multistart"):
             def cobyla(u, most=max_evaluations):
-                return minimize(f, u, method="COBYLA", constraints=[{"type": "ineq", "fun": g}], bounds=[(
-                    0.0, 1.0)] * len(keys), options={"rhobeg": rhobeg, "tol": tol, "maxiter": most})
+                return minimize(f, u, method="COBYLA", constraints=[{"type": "ineq", "fun": g}] + (
+                    [] if ideal else [{"type": "ineq", "fun": exists}]), bounds=[(0.0, 1.0)] * len(keys),
+                    options={"rhobeg": rhobeg, "tol": tol, "maxiter": most})
             res, found = (cobyla(u0), []) if method == "cobyla" else multistart_search(
                 evaluate, id_and_changes, store, _design_record,
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
