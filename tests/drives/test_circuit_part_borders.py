@@ -21,6 +21,10 @@ change.
   corrector's first iterate), starts with the flag the state says and passes; the branch reaches its
   end, and fresh orbits' pressure histories on either side cross the level where its border
   collision says.
+- Continued in the spool's damping, the spool drill meets its spool's low stop's border: slowed, the
+  spool reaches the stop no longer pushed into it and leaves it at once; the greatest push into the
+  stop while the spool is at it, read from fresh orbits' dense states on either side, crosses 0 where
+  the branch's border collision says.
 """
 
 from pathlib import Path
@@ -170,5 +174,35 @@ def test_continuation_passes_where_the_check_valve_stops_opening_fully(check_bra
         sides.append((at * factor, drop.max()))
     (s0, g0), (s1, g1) = sides
     assert g0 > 0.0 > g1  # (a higher cracking pressure, the full opening no longer reached)
+    crossing = s0 - g0 * (s1 - s0) / (g1 - g0)
+    assert crossing == pytest.approx(at, rel=1e-3)
+
+
+def test_continuation_locates_where_the_spool_stops_resting_on_its_low_stop():
+    # the spool's damping raised from the example's 50 N*s/m: past some 248 N*s/m the spool, slowed,
+    # reaches its low stop no longer pushed into it and leaves it at once (its rest there ends)
+    d = physical.load(ROOT / "circuit_drill_spool.toml")
+    branch = physical.continue_circuit(d, "parts.main_spool.damping", "300 N*s/m")
+    assert branch.branch.status == BranchStatus.REACHED
+    assert [e.surface for e in branch.branch.events] == ["main_spool_stop.low"]
+    (event,) = branch.branch.events
+    assert abs(border_tests(event.orbit)["main_spool_stop.low"]) < 1e-8
+    (si,) = [e for e in branch.events if e["kind"] == "border-collision main_spool_stop.low"]
+    at = si["value"]  # (N*s/m)
+    assert at == pytest.approx(247.934, abs=0.01)  # (benchmarks/HISTORY.md quotes it)
+    # from fresh orbits on either side, the greatest push into the low stop while the spool is at it,
+    # read from the dense states (the stop's force along the flights), not from the border test
+    sides = []
+    for factor in (0.999, 1.001):
+        dd = _changed(ROOT / "circuit_drill_spool.toml", {"parts.main_spool.damping": f"{at * factor} N*s/m"})
+        orbit = find_orbit(dd.model(), dd.drive())
+        (stop,) = [w for w in orbit.drive._watched if w.kind == NW.SPOOL]
+        samples = _dense(orbit)
+        x = np.array([z[stop.form[0][0][1]] for _, z in samples])
+        push = np.array([stop.quantity(q, z) for q, z in samples])
+        assert x.min() == pytest.approx(0.0, abs=1e-12)  # (it reaches the stop on both sides)
+        sides.append((at * factor, push[x <= 1e-12].max()))
+    (s0, g0), (s1, g1) = sides
+    assert g0 > 0.0 > g1  # (more damping: no longer pushed into the stop where it arrives)
     crossing = s0 - g0 * (s1 - s0) / (g1 - g0)
     assert crossing == pytest.approx(at, rel=1e-3)
