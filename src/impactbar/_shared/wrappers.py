@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from .literals import module_kernels
 
-__all__ = ["internal_kernels"]
+__all__ = ["internal_kernels", "link_only", "internal_jitable"]
 
 _GUARDED: dict = {}
 _CLASSES: dict = {}
@@ -202,24 +202,64 @@ def internal_kernels(namespace: dict, python=()) -> int:
     ...
     TypeError: ... is a numba kernel compiled without its Python wrapper: call it from another kernel
     """
-    from numba.core.caching import NullCache
-
     name = namespace.get("__name__")
     ours = module_kernels(namespace)
     python = set(python)
     unknown = python - set(ours)
     if unknown:
         raise ValueError(f"python names no kernel of {name}: {sorted(unknown)}")
-    classes = _link_only_classes()
-    compiler = classes["compiler"]
     n = 0
     for k, disp in ours.items():
-        disp.targetoptions["no_cfunc_wrapper"] = True
-        disp._compiler.pipeline_class = classes["lean"]
-        if k not in python:
-            disp.targetoptions["no_cpython_wrapper"] = True
-            disp._compiler.pipeline_class = compiler
-            disp._cache = NullCache()
-            disp.__class__ = _guarded_class(type(disp))
+        if k in python:
+            disp.targetoptions["no_cfunc_wrapper"] = True
+            disp._compiler.pipeline_class = _link_only_classes()["lean"]
+        else:
+            link_only(disp)
             n += 1
     return n
+
+
+def link_only(disp):
+    """Compile one numba kernel that only kernels call link-only, with the lean counting of references
+    (:func:`internal_kernels` for a kernel made from a function of another module).
+
+    Parameters
+    ----------
+    disp : numba dispatcher
+        The kernel, not yet compiled.
+
+    Returns
+    -------
+    numba dispatcher
+        ``disp``, changed in place: no machine code, wrappers or cache entry of its own; a call of it
+        from Python raises :class:`TypeError`.
+    """
+    from numba.core.caching import NullCache
+
+    disp.targetoptions["no_cfunc_wrapper"] = True
+    disp.targetoptions["no_cpython_wrapper"] = True
+    disp._compiler.pipeline_class = _link_only_classes()["compiler"]
+    disp._cache = NullCache()
+    disp.__class__ = _guarded_class(type(disp))
+    return disp
+
+
+def internal_jitable(fn):
+    """numba's ``register_jitable``, its implementation compiled link-only with the lean counting of
+    references: a plain Python function that Python calls as it is and kernels compile into their own
+    code (its machine code is theirs; it has no wrappers of its own).
+
+    Parameters
+    ----------
+    fn : function
+        A Python function that numba can compile.
+
+    Returns
+    -------
+    function
+        ``fn`` itself, registered for kernels.
+    """
+    from numba.extending import register_jitable
+
+    return register_jitable(pipeline_class=_link_only_classes()["compiler"], no_cpython_wrapper=True,
+                            no_cfunc_wrapper=True)(fn)
