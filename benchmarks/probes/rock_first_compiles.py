@@ -47,7 +47,7 @@ class Listener(event.Listener):
         own[name] += dt - callees
         count[name] += 1
         sigs[name].append(str(ev.data["args"]))
-        machine[name] = not disp.targetoptions.get("no_cpython_wrapper", False)
+        machine[name] = disp._compiler.pipeline_class.__name__ != "LinkOnlyCompiler"
         if stack:
             stack[-1][1] += dt
 

@@ -105,6 +105,15 @@ def _lean_compiler():
         def lowering_class(self):
             return LeanLower
 
+        def run_pass(self, state):
+            # the wrappers left out here, after typing, not by the kernel's options: numba keys the
+            # implementations of its own overloads (``max``, ``np.empty``, ...) on the options of the
+            # kernel that types them, and would compile them again for each set
+            state.flags.no_cfunc_wrapper = True
+            if getattr(state.library, "link_only", False):
+                state.flags.no_cpython_wrapper = True
+            return super().run_pass(state)
+
     class LeanCompiler(Compiler):
         """numba's compiler, its lowering pass :class:`LeanNativeLowering`."""
 
@@ -131,6 +140,8 @@ def _link_only_classes():
         class LinkOnlyLibrary(JITCodeLibrary):
             """The LLVM module of a kernel that only other kernels call: linked into theirs, which
             optimise it with their own and make its machine code; none of its own."""
+
+            link_only = True  # (its kernel's lowering leaves out the wrappers)
 
             def _optimize_final_module(self):
                 pass  # (each caller optimises it with its own module)
@@ -211,8 +222,7 @@ def internal_kernels(namespace: dict, python=()) -> int:
     n = 0
     for k, disp in ours.items():
         if k in python:
-            disp.targetoptions["no_cfunc_wrapper"] = True
-            disp._compiler.pipeline_class = _link_only_classes()["lean"]
+            disp._compiler.pipeline_class = _link_only_classes()["lean"]  # (no C wrapper)
         else:
             link_only(disp)
             n += 1
@@ -236,9 +246,7 @@ def link_only(disp):
     """
     from numba.core.caching import NullCache
 
-    disp.targetoptions["no_cfunc_wrapper"] = True
-    disp.targetoptions["no_cpython_wrapper"] = True
-    disp._compiler.pipeline_class = _link_only_classes()["compiler"]
+    disp._compiler.pipeline_class = _link_only_classes()["compiler"]  # (no wrappers)
     disp._cache = NullCache()
     disp.__class__ = _guarded_class(type(disp))
     return disp
@@ -261,5 +269,7 @@ def internal_jitable(fn):
     """
     from numba.extending import register_jitable
 
-    return register_jitable(pipeline_class=_link_only_classes()["compiler"], no_cpython_wrapper=True,
-                            no_cfunc_wrapper=True)(fn)
+    # (the options of the rod and rock's kernels, which call them: numba's overloads that they call
+    # are then compiled once for both)
+    return register_jitable(pipeline_class=_link_only_classes()["compiler"], no_cpython_wrapper=False,
+                            nogil=True)(fn)
