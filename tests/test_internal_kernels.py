@@ -165,7 +165,9 @@ def test_an_internal_jitable_is_python_for_python_and_link_only_for_kernels():
     (own,) = impl.overloads.values()
     assert own.fndesc is not None and own.library.get_pointer_to_function(own.fndesc.llvm_func_name) == 0
     assert not own.library._final_module.get_function(own.fndesc.llvm_func_name).is_declaration
-    assert not [f.name for f in own.library._final_module.functions if f.name.startswith(("cpython.", "cfunc."))]
+    functions = own.library._final_module.functions
+    wrappers = [f.name for f in functions if f.name.startswith(("cpython.", "cfunc."))]
+    assert wrappers == []
     (top,) = caller.overloads.values()
     jit = top.library.codegen._engine._ee
     assert top.library._final_module in jit._modules and own.library._final_module not in jit._modules

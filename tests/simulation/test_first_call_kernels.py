@@ -103,29 +103,19 @@ def test_the_first_exact_blow_compiles_each_kernel_once_and_samples_its_record_i
     assert out["records"] == here["records"]
 
 
-#: the README's rod and rock on the lattice (a bit with mass): each compile's function, argument types and whether it
-#: made machine code of its own (else link-only, compiled into its callers'), and the blow's record
+#: the README's rod and rock on the lattice (a bit with mass): each compile's function, argument
+#: types and whether it made machine code of its own (else link-only, compiled into its callers'),
+#: and the blow's record
 _LATTICE = """
 import json
 from numba.core import event
-
-compiled = []
-
-
-class Count(event.Listener):
-    def on_start(self, ev):
-        pass
-
-    def on_end(self, ev):
-        disp = ev.data["dispatcher"]
-        compiled.append([disp.py_func.__module__ + "." + disp.py_func.__qualname__, str(ev.data["args"]),
-                         disp._compiler.pipeline_class.__name__ != "LinkOnlyCompiler"])
-
-
-event.register("numba:compile", Count())
 from impactbar.laws.rodrock.blow import rod_rock_blow
 
-blow = rod_rock_blow(2.0, 1.0, [40.0], [1.0], [1.0], 2.5, 25.0, 0.2, 0.0, t_max=39.0)
+with event.install_recorder("numba:compile") as recorder:
+    blow = rod_rock_blow(2.0, 1.0, [40.0], [1.0], [1.0], 2.5, 25.0, 0.2, 0.0, t_max=39.0)
+compiled = [[d.py_func.__module__ + "." + d.py_func.__qualname__, str(ev.data["args"]),
+             d._compiler.pipeline_class.__name__ != "LinkOnlyCompiler"]
+            for _, ev in recorder.buffer if ev.is_end for d in [ev.data["dispatcher"]]]
 print(json.dumps({"compiled": compiled, "forces": blow.bit_forces.tolist(), "efficiency": blow.efficiency}))
 """
 
