@@ -133,3 +133,61 @@ def test_a_cached_caller_needs_no_compile_of_its_internal_callees(tmp_path):
     assert any("root_sum" in f for f in cached) and not any("norm2" in f for f in cached)
     expected = math.sqrt(3.0**2 + 1.0 + 2.0**2 + 0.25 + 16.0)
     assert float.fromhex(runs[0]["r"]) == float.fromhex(runs[1]["r"]) == pytest.approx(expected, rel=1e-15)
+
+
+def test_link_only_makes_a_kernel_of_another_modules_function_internal():
+    """:func:`link_only` on one dispatcher (a kernel made here from a function defined elsewhere):
+    its caller computes with it, Python may not call it, and it made no machine code of its own."""
+    from impactbar._shared.wrappers import link_only
+
+    ns = _kernels()
+    norm2 = link_only(ns["norm2"])
+    a, b = np.array([3.0, 1.0, 2.0]), np.array([0.5, -4.0])
+    assert ns["root_sum"]((a, b)) == math.sqrt(np.dot(a, a) + np.dot(b, b))
+    with pytest.raises(TypeError, match="without its Python wrapper"):
+        norm2(a)
+    (own,) = norm2.overloads.values()
+    (caller,) = ns["root_sum"].overloads.values()
+    jit = caller.library.codegen._engine._ee
+    assert caller.library._final_module in jit._modules
+    assert own.library._final_module not in jit._modules
+
+
+def test_an_internal_jitable_is_python_for_python_and_link_only_for_kernels():
+    """:func:`internal_jitable`: the function itself for Python; a kernel compiles it into its own
+    code, its implementation with no machine code and no wrappers of its own."""
+    from numba.core import event
+
+    from impactbar._shared.wrappers import internal_jitable
+
+    def hypot3(x, y, z):
+        return math.sqrt(x * x + y * y + z * z)
+
+    assert internal_jitable(hypot3) is hypot3
+    assert hypot3(2.0, 3.0, 6.0) == 7.0  # (plain Python)
+
+    @numba.njit
+    def caller(v):
+        return hypot3(v[0], v[1], v[2]) + 1.0
+
+    compiled = []
+
+    class Listen(event.Listener):
+        def on_start(self, ev):
+            pass
+
+        def on_end(self, ev):
+            compiled.append(ev.data["dispatcher"])
+
+    with event.install_listener("numba:compile", Listen()):
+        assert caller(np.array([1.0, 4.0, 8.0])) == 10.0
+    (impl,) = [d for d in compiled if d.py_func is hypot3]
+    (own,) = impl.overloads.values()
+    assert own.fndesc is not None and own.library.get_pointer_to_function(own.fndesc.llvm_func_name) == 0
+    assert not own.library._final_module.get_function(own.fndesc.llvm_func_name).is_declaration
+    functions = own.library._final_module.functions
+    wrappers = [f.name for f in functions if f.name.startswith(("cpython.", "cfunc."))]
+    assert wrappers == []
+    (top,) = caller.overloads.values()
+    jit = top.library.codegen._engine._ee
+    assert top.library._final_module in jit._modules and own.library._final_module not in jit._modules

@@ -128,9 +128,14 @@ def test_the_bits_step_tangent_is_its_derivative(case):
     """One step of the bit on the rock (``bit_step``, compiled) across each switch of the bilinear
     law inside the step: its tangent against central differences in every state variable and in
     the input ``E`` (underdamped and overdamped bits, and every branch's closed form)."""
-    from impactbar.laws.rodrock._rockloop import bit_step
-    from impactbar.laws.rodrock._rocktangent import bit_step_tangent
+    import numba
 
+    from impactbar.laws.rodrock import _rockloop, _rocktangent
+
+    # (both are link-only, compiled into the loops that call them: called here through kernels)
+    bit_step = numba.njit(lambda bs, bp, e, dt: _rockloop.bit_step(bs, bp, e, dt))
+    bit_step_tangent = numba.njit(lambda bs, bp, dbs, e, de, dt, scratch, J: _rocktangent.bit_step_tangent(
+        bs, bp, dbs, e, de, dt, scratch, J))
     bp, bs0, E, dt, end = BIT_CASES[case]
     bp, bs0 = np.array(bp), np.array(bs0, dtype=float)
 

@@ -9,6 +9,7 @@ import subprocess
 import sys
 from collections import Counter
 
+import numpy as np
 import pytest
 
 #: a child's preamble: ``compiled`` lists each numba compile's function, in order
@@ -100,6 +101,49 @@ def test_the_first_exact_blow_compiles_each_kernel_once_and_samples_its_record_i
     finally:
         _tiers._PROCESS.eager = eager
     assert out["records"] == here["records"]
+
+
+#: the README's rod and rock on the lattice (a bit with mass): each compile's function, argument
+#: types and whether it made machine code of its own (else link-only, compiled into its callers'),
+#: and the blow's record
+_LATTICE = """
+import json
+from numba.core import event
+from impactbar.laws.rodrock.blow import rod_rock_blow
+
+with event.install_recorder("numba:compile") as recorder:
+    blow = rod_rock_blow(2.0, 1.0, [40.0], [1.0], [1.0], 2.5, 25.0, 0.2, 0.0, t_max=39.0)
+compiled = [[d.py_func.__module__ + "." + d.py_func.__qualname__, str(ev.data["args"]),
+             d._compiler.pipeline_class.__name__ != "LinkOnlyCompiler"]
+            for _, ev in recorder.buffer if ev.is_end for d in [ev.data["dispatcher"]]]
+print(json.dumps({"compiled": compiled, "forces": blow.bit_forces.tolist(), "efficiency": blow.efficiency}))
+"""
+
+
+def test_the_lattice_blows_helpers_are_compiled_into_its_loop_and_numbas_overloads_once(tmp_path):
+    """A first blow on the lattice (a bit with mass: every helper of the bit's step reached), with an
+    empty numba cache: each of impactbar's kernels compiles once, and only the loop and the test of
+    the piston free for good, which Python calls, make machine code and wrappers of their own (the
+    bit's and the contact's helpers are link-only: 19 of them made their own on c5645d83); numba's
+    own overloads (``max``, ``min``, ``np.empty``) compile once for each argument types, not again
+    for the link-only kernels' options. The record is the numpy loop's (the reference of
+    ``"rock.blow"``), the same arithmetic step for step."""
+    from impactbar.dynamics.implementations import use_reference
+    from impactbar.laws.rodrock.blow import rod_rock_blow
+
+    out = _first_call(_LATTICE, tmp_path)
+    names = Counter(name for name, _, _ in out["compiled"])
+    assert {k: n for k, n in names.items() if k.startswith("impactbar.") and n > 1} == {}
+    rock = {name: own for name, _, own in out["compiled"] if name.startswith("impactbar.laws.rodrock.")}
+    assert len(rock) >= 19
+    assert sorted(k for k, own in rock.items() if own) == ["impactbar.laws.rodrock._rockloop.blow_loop",
+                                                            "impactbar.laws.rodrock._rockloop.piston_free"]
+    overloads = Counter((name, args) for name, args, _ in out["compiled"] if name.startswith("numba."))
+    assert overloads and {k: n for k, n in overloads.items() if n > 1} == {}
+    with use_reference("rock.blow"):
+        ref = rod_rock_blow(2.0, 1.0, [40.0], [1.0], [1.0], 2.5, 25.0, 0.2, 0.0, t_max=39.0)
+    np.testing.assert_allclose(out["forces"], ref.bit_forces, rtol=1e-10, atol=1e-12 * max(ref.bit_forces))
+    assert out["efficiency"] == pytest.approx(ref.efficiency, rel=1e-10)
 
 
 _CIRCUIT_HELPERS = _COUNT + """

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from .literals import module_kernels
 
-__all__ = ["internal_kernels"]
+__all__ = ["internal_kernels", "link_only", "internal_jitable"]
 
 _GUARDED: dict = {}
 _CLASSES: dict = {}
@@ -130,6 +130,15 @@ def _lean_compiler():
         def lowering_class(self):
             return LeanLower
 
+        def run_pass(self, state):
+            # the wrappers left out here, after typing, not by the kernel's options: numba keys the
+            # implementations of its own overloads (``max``, ``np.empty``, ...) on the options of the
+            # kernel that types them, and would compile them again for each set
+            state.flags.no_cfunc_wrapper = True
+            if getattr(state.library, "link_only", False):
+                state.flags.no_cpython_wrapper = True
+            return super().run_pass(state)
+
     class LeanCompiler(Compiler):
         """numba's compiler, its lowering pass :class:`LeanNativeLowering`."""
 
@@ -156,6 +165,8 @@ def _link_only_classes():
         class LinkOnlyLibrary(JITCodeLibrary):
             """The LLVM module of a kernel that only other kernels call: linked into theirs, which
             optimise it with their own and make its machine code; none of its own."""
+
+            link_only = True  # (its kernel's lowering leaves out the wrappers)
 
             def _optimize_final_module(self):
                 pass  # (each caller optimises it with its own module)
@@ -232,8 +243,6 @@ def internal_kernels(namespace: dict, python=(), from_python: str = "raise") -> 
     ...
     TypeError: ... is a numba kernel compiled without its Python wrapper: call it from another kernel
     """
-    from numba.core.caching import NullCache
-
     if from_python not in ("raise", "compile"):
         raise ValueError(f"from_python must be 'raise' or 'compile', not {from_python!r}")
     name = namespace.get("__name__")
@@ -242,17 +251,68 @@ def internal_kernels(namespace: dict, python=(), from_python: str = "raise") -> 
     unknown = python - set(ours)
     if unknown:
         raise ValueError(f"python names no kernel of {name}: {sorted(unknown)}")
-    classes = _link_only_classes()
-    compiler = classes["compiler"]
     n = 0
     for k, disp in ours.items():
-        disp.targetoptions["no_cfunc_wrapper"] = True
-        disp._compiler.pipeline_class = classes["lean"]
-        if k not in python:
-            disp.targetoptions["no_cpython_wrapper"] = True
-            disp._compiler.pipeline_class = compiler
-            disp._impactbar_cached = not isinstance(disp._cache, NullCache)
-            disp._cache = NullCache()
-            disp.__class__ = _guarded_class(type(disp), from_python == "compile")
+        if k in python:
+            disp._compiler.pipeline_class = _link_only_classes()["lean"]  # (no C wrapper)
+        else:
+            link_only(disp, from_python)
             n += 1
     return n
+
+
+def link_only(disp, from_python: str = "raise"):
+    """Compile one numba kernel that only kernels call link-only, with the lean counting of references
+    (:func:`internal_kernels` for a kernel made from a function of another module).
+
+    Parameters
+    ----------
+    disp : numba dispatcher
+        The kernel, not yet compiled.
+    from_python : {"raise", "compile"}, optional
+        What a call of it from Python does (:func:`internal_kernels`'s ``from_python``).
+
+    Returns
+    -------
+    numba dispatcher
+        ``disp``, changed in place: no machine code, wrappers or cache entry of its own; a call of it
+        from Python raises :class:`TypeError` or, with ``from_python="compile"``, compiles it once
+        as a whole kernel and calls that.
+
+    Raises
+    ------
+    ValueError
+        If ``from_python`` is neither ``"raise"`` nor ``"compile"``.
+    """
+    from numba.core.caching import NullCache
+
+    if from_python not in ("raise", "compile"):
+        raise ValueError(f"from_python must be 'raise' or 'compile', not {from_python!r}")
+    disp._compiler.pipeline_class = _link_only_classes()["compiler"]  # (no wrappers)
+    disp._impactbar_cached = not isinstance(disp._cache, NullCache)
+    disp._cache = NullCache()
+    disp.__class__ = _guarded_class(type(disp), from_python == "compile")
+    return disp
+
+
+def internal_jitable(fn):
+    """numba's ``register_jitable``, its implementation compiled link-only with the lean counting of
+    references: a plain Python function that Python calls as it is and kernels compile into their own
+    code (its machine code is theirs; it has no wrappers of its own).
+
+    Parameters
+    ----------
+    fn : function
+        A Python function that numba can compile.
+
+    Returns
+    -------
+    function
+        ``fn`` itself, registered for kernels.
+    """
+    from numba.extending import register_jitable
+
+    # (the options of the rod and rock's kernels, which call them: numba's overloads that they call
+    # are then compiled once for both)
+    return register_jitable(pipeline_class=_link_only_classes()["compiler"], no_cpython_wrapper=False,
+                            nogil=True)(fn)

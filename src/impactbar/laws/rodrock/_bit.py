@@ -7,7 +7,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba.extending import register_jitable
+
+from ..._shared.wrappers import internal_jitable
 
 # branches of the bilinear law
 _LOAD, _ELASTIC, _FREE = 0, 1, 2
@@ -211,7 +212,7 @@ class _Bit:
         return tau
 
 
-@register_jitable  # (called by the compiled loop's copies of the functions below too)
+@internal_jitable  # (called by the compiled loop's copies of the functions below too: link-only)
 def _fronts(fa, ga, prev, nxt):
     """The part of a step before each arriving wave's front (``opens_inside``; 0 where its values
     before and after agree)."""
@@ -222,7 +223,7 @@ def _fronts(fa, ga, prev, nxt):
     return pf, pg
 
 
-@register_jitable
+@internal_jitable
 def _piece(k, pf, pg, prev, nxt):
     """The ``k``-th of the three pieces of a step the arriving waves' fronts ``pf, pg``
     (:func:`_fronts`) cut it into: ``(a, b, F, G)``, its ends (parts of the step) and the waves."""
@@ -234,7 +235,7 @@ def _piece(k, pf, pg, prev, nxt):
     return a, b, f0 if m < pf else f1, g0 if m < pg else g1
 
 
-@register_jitable
+@internal_jitable
 def closes_inside(za, zb, fa, ga, prev, nxt, gap, dt):
     """Where the piston-shank gap ``gap`` closes inside a step, the arriving waves read as in
     :func:`opens_inside`: ``(s, impulse)``, the part of the step before (1: not inside it) and the
@@ -258,7 +259,7 @@ def closes_inside(za, zb, fa, ga, prev, nxt, gap, dt):
     return s, impulse
 
 
-@register_jitable
+@internal_jitable
 def opens_inside(za, zb, fa, ga, prev, nxt, dt):
     """Where the piston-shank contact (impedances ``za | zb``), closed at a step's start, opens
     inside the step (``BlowGrid.locate``): each arriving wave's cell average (``fa``, ``ga``) read as

@@ -14,6 +14,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.wrappers import internal_kernels, link_only
 from ...dynamics.compiled import CACHE
 from ._bit import contact_step, damped_flow
 from ._records import (
@@ -140,8 +141,8 @@ def _massless(bs, bp, E, T):
     return tau
 
 
-#: The bit's flow on a rock branch (:func:`impactbar.laws.rodrock._bit.damped_flow`, compiled).
-_damped = numba.njit(cache=CACHE, nogil=True)(damped_flow)
+#: The bit's flow on a rock branch (:func:`impactbar.laws.rodrock._bit.damped_flow`, compiled link-only).
+_damped = link_only(numba.njit(cache=CACHE, nogil=True)(damped_flow))
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -259,8 +260,8 @@ def bit_step(bs, bp, E, dt):
             left -= _with_mass(bs, bp, E, left)
 
 
-#: The piston-shank contact over one step (:func:`impactbar.laws.rodrock._bit.contact_step`, compiled).
-_contact_step = numba.njit(cache=CACHE, nogil=True)(contact_step)
+#: The piston-shank contact over one step (:func:`impactbar.laws.rodrock._bit.contact_step`), link-only.
+_contact_step = link_only(numba.njit(cache=CACHE, nogil=True)(contact_step))
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -378,3 +379,6 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     acc[ACC_USHANK], acc[ACC_LOSS], acc[ACC_STEPS] = u_shank, grid_loss, steps
     acc[ACC_ENDED], acc[ACC_GAP], acc[ACC_WORK] = ended, gap, work
     acc[ACC_HELD], acc[ACC_FA], acc[ACC_GA] = 1.0 if held else 0.0, fprev, gprev
+
+
+internal_kernels(globals(), python=("blow_loop", "piston_free"))  # the others: link-only (kernels call them)

@@ -27,6 +27,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from . import _records as RS
 from ._rockloop import (
@@ -344,3 +345,6 @@ def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, a
                 steps, ended = step + 1, 1.0
                 break
     acc[RS.ACC_STEPS], acc[RS.ACC_ENDED] = steps, ended
+
+
+internal_kernels(globals(), python=("blow_loop_tangent",))  # the others: link-only (kernels call them)
