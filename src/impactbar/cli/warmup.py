@@ -30,8 +30,8 @@ KERNELS = {
     "rod and rock orbits, exact blows": 16,
     "rod and rock orbits, lattice": 22,
     "rigid sweep chunks": 26,
-    "oil circuit": 89,
-    "oil circuit on rod and rock": 25,
+    "oil circuit": 81,
+    "oil circuit on rod and rock": 24,
     "piston optimiser": 11,
 }
 
