@@ -14,6 +14,7 @@ import pytest
 
 from impactbar.physical import build, optimize_drifter, read_config, with_values
 from impactbar.physical.geometry import piston_geometry
+from impactbar.physical.optimize_drifter import FEASIBILITY_TOLERANCE
 
 ROOT = Path(__file__).resolve().parents[2]
 PISTON_EXAMPLE = ROOT / "examples" / "circuit_drifter_rock_piston.toml"
@@ -388,8 +389,12 @@ def test_full_example_problem_reproduces_the_docs_optimum():
                    method=cert.method)
     assert band.active == cert.active and band.bounds == cert.bounds
     assert band.residual == pytest.approx(cert.residual, rel=1e-12)
+    # the continued orbit's distance from the fresh one is the orbit's rounding, not a figure of the
+    # design: compared to its order of magnitude (along the SLSQP search of the preset's cap, one
+    # search's designs give 7e-12 to 4e-10), both within the feasibility tolerance
     m = quote(r"agreed with their fresh ones to ([0-9.]+e-[0-9]+) and ([0-9.]+e-[0-9]+)")
-    assert float(m[2]) == pytest.approx(res.optimum["continued_vs_fresh"], rel=0.1)
+    assert abs(math.log10(float(m[2]) / res.optimum["continued_vs_fresh"])) < 1.0
+    assert max(float(m[2]), res.optimum["continued_vs_fresh"]) < FEASIBILITY_TOLERANCE
 
 
 def test_readme_quotes_the_docs_table():

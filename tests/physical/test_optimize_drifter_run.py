@@ -263,7 +263,14 @@ def test_a_miss_below_the_orbits_accuracy_counts_as_met():
 def test_slsqp_keeps_its_better_design_along_an_active_cap():
     """SLSQP on the preset (pre-charge and pump flow, impact power, the mean supply pressure capped
     at 23.706 MPa): its designs walk along the cap, missing it by fractions of a pascal; the best
-    of them counts as met, 13 % above the baseline (about 40 s)."""
+    of them counts as met, 13 % above the baseline (about 40 s).
+
+    The page's miss of the cap is compared at the orbit's accuracy, not to the digits it prints: the
+    search's six continued orbits differ from their designs' fresh ones by up to 0.0096 Pa (4e-10 of
+    the cap; the best design's by 0.0042 Pa), and the fresh miss itself moved from 0.011 to 0.004 and
+    back to 0.0109 Pa with changes of the code that kept the figures to some 1e-10; hence 0.02 Pa,
+    twice that spread (8e-10 of the cap), 12 times inside the feasibility tolerance (1e-8); the
+    spread is measured again here and must stay below it."""
     res = optimize_drifter("circuit-drifter", {"accumulator.precharge": ("7 MPa", "13 MPa"),
                                                "supply.pump_flow": ("60 L/min", "90 L/min")},
                            objective="impact_power", constraints={"mean_supply_pressure": "23.706 MPa",
@@ -274,10 +281,17 @@ def test_slsqp_keeps_its_better_design_along_an_active_cap():
     assert c["value"] <= 23.706e6 * (1 + 1e-8) and res.optimum["feasible"]
     # as the page quotes them: the miss in pascals and of the cap, the gain
     text = re.sub(r"\s+", " ", (ROOT / "docs" / "optimising_a_drifter.md").read_text())
-    m = re.search(r"misses the cap by ([0-9.]+) Pa, ([0-9]e-[0-9]+) of it, and gains ([0-9.]+) %", text)
+    m = re.search(r"misses the cap by ([0-9.]+) Pa, ([0-9]e-[0-9]+) of it \(a miss below the orbit's "
+                  r"accuracy\), and gains ([0-9.]+) %", text)
     assert m is not None, "the page's quote of this search is gone; update this test with the text"
-    assert float(m[1]) == pytest.approx(c["value"] - 23.706e6, abs=5e-4)
-    assert float(m[2]) == pytest.approx(c["value"] / 23.706e6 - 1.0, rel=0.2)
+    accuracy = 0.02  # Pa: twice the continued orbits' largest difference from fresh ones (docstring)
+    config = read_config("circuit-drifter")[0]
+    spread = [r["constraints"]["mean_supply_pressure"]["value"]
+              - build(with_values(config, r["changes"])).orbit().mean_supply_pressure_Pa
+              for r in res.history if r.get("continued")]
+    assert len(spread) >= 5 and 0.0 < max(map(abs, spread)) < accuracy
+    assert float(m[1]) == pytest.approx(c["value"] - 23.706e6, abs=accuracy)
+    assert float(m[2]) == pytest.approx(c["value"] / 23.706e6 - 1.0, abs=accuracy / 23.706e6)
     assert float(m[3]) == pytest.approx(100.0 * res.gain, abs=0.05)
     # and a design of more power that missed the cap by more is said why it was not kept
     assert "missed a constraint, the nearest mean_supply_pressure by" in res.message
