@@ -103,9 +103,10 @@ class Callback:
         return self._cfunc
 
 
-def callback(signature, cache: bool = CACHE):
+def callback(signature, cache: bool):
     """Decorator: the function as a :class:`Callback` of the C signature ``signature`` (compiled on
-    first use; numba's cache as ``cache`` says)."""
+    first use; numba's cache as ``cache`` says: the caller passes its module's ``cache=`` option, so
+    that a cache folder found unwritable at import compiles in memory)."""
     return lambda pyfunc: Callback(signature, pyfunc, cache)
 
 
