@@ -53,6 +53,14 @@ def _guarded_class(cls, compile_for_python: bool = False):
     return _GUARDED[key]
 
 
+def _compiles_for_python(from_python: str) -> bool:
+    """Whether ``from_python`` (:func:`internal_kernels`'s) says a call from Python compiles the kernel
+    (``"compile"``) rather than raising (``"raise"``); ``ValueError`` for anything else."""
+    if from_python not in ("raise", "compile"):
+        raise ValueError(f"from_python must be 'raise' or 'compile', not {from_python!r}")
+    return from_python == "compile"
+
+
 def _whole_kernel(disp):
     """The link-only kernel ``disp``'s function as a whole kernel of its own (made once): its options,
     with its Python wrapper, machine code and (where ``disp`` had one) cache entry; its callees are
@@ -61,8 +69,7 @@ def _whole_kernel(disp):
     if whole is None:
         import numba
 
-        options = {k: v for k, v in disp.targetoptions.items()
-                   if k not in ("no_cpython_wrapper", "no_cfunc_wrapper", "nopython")}
+        options = {k: v for k, v in disp.targetoptions.items() if k != "nopython"}  # (njit's own)
         whole = numba.njit(cache=disp.__dict__["_impactbar_cached"], **options)(disp.py_func)
         whole._compiler.pipeline_class = _link_only_classes()["lean"]
         disp._impactbar_whole = whole
@@ -243,8 +250,7 @@ def internal_kernels(namespace: dict, python=(), from_python: str = "raise") -> 
     ...
     TypeError: ... is a numba kernel compiled without its Python wrapper: call it from another kernel
     """
-    if from_python not in ("raise", "compile"):
-        raise ValueError(f"from_python must be 'raise' or 'compile', not {from_python!r}")
+    _compiles_for_python(from_python)  # (refused before any kernel is changed)
     name = namespace.get("__name__")
     ours = module_kernels(namespace)
     python = set(python)
@@ -286,12 +292,10 @@ def link_only(disp, from_python: str = "raise"):
     """
     from numba.core.caching import NullCache
 
-    if from_python not in ("raise", "compile"):
-        raise ValueError(f"from_python must be 'raise' or 'compile', not {from_python!r}")
     disp._compiler.pipeline_class = _link_only_classes()["compiler"]  # (no wrappers)
     disp._impactbar_cached = not isinstance(disp._cache, NullCache)
     disp._cache = NullCache()
-    disp.__class__ = _guarded_class(type(disp), from_python == "compile")
+    disp.__class__ = _guarded_class(type(disp), _compiles_for_python(from_python))
     return disp
 
 

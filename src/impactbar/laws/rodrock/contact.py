@@ -126,9 +126,11 @@ class RockContact:
                 f"{b.work_on_rock!r}, efficiency={b.efficiency!r})")
 
     def __getattr__(self, name):
-        if name.startswith("__") or name == "blow":
+        # (the blow's figures read as the contact's; a private name, or the blow itself not yet set
+        # while unpickled or copied, is not delegated: a subclass's blow may be a property over them)
+        if name.startswith("_") or name == "blow":
             raise AttributeError(name)
-        return getattr(self.__dict__["blow"], name)
+        return getattr(self.blow, name)
 
     def resolve(self) -> RockContact:
         """Itself (solved at once)."""

@@ -609,11 +609,6 @@ class ExactRockContact(RockContact):
         if self._blow is not None:
             self._blow = self._blow.with_stored_apart()
 
-    def __getattr__(self, name):
-        if name.startswith("_") or name == "blow":  # (not yet set: while unpickled or copied)
-            raise AttributeError(name)
-        return getattr(self.blow, name)
-
     def _at(self, tau: float):
         """The exact blow solved again up to ``tau`` (cached)."""
         tau = self._check_tau(tau)
