@@ -203,6 +203,7 @@ def _callbacks_compiled() -> int:
     from numba.core.ccallback import CFunc
 
     modules = [m for name, m in list(sys.modules.items()) if name.startswith("impactbar") and m is not None]
-    found = [v.cfunc if isinstance(getattr(type(v), "cfunc", None), property) else v  # (a callback compiled
-             for m in modules for v in list(vars(m).values())]  # at first use: its CFunc, None before)
+    cvode = sys.modules.get("impactbar.drives.circuit._cvode")  # (a callback compiled at first use:
+    late = () if cvode is None else cvode.Callback  # its CFunc, None before)
+    found = [v.cfunc if isinstance(v, late) else v for m in modules for v in list(vars(m).values())]
     return sum(1 for v in found if isinstance(v, CFunc) and v.cache_hits == 0)
