@@ -234,7 +234,9 @@ class Flight(NamedTuple):
     end : int
         :data:`ARRIVAL`, :data:`EVENT` or :data:`END`.
     events : tuple of DriveEvent
-        The drive's events at ``t`` (with :data:`EVENT`), in the drive's order.
+        The drive's events at ``t`` (with :data:`EVENT`, or with :data:`ARRIVAL` those its root finder
+        found on the arrival's own root: the oil circuit's levels, whose flags the caller turns before
+        the impact's map), in the drive's order.
     piece : ClosedPiece or OdePiece
         The flight, to evaluate it at any time in it.
     sensitivity : numpy.ndarray or None

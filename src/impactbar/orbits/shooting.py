@@ -241,17 +241,17 @@ class ShootingProblem(OrbitProblem):
             t, q, v = fl.t, fl.q, fl.v
             before = state.mode
             state = DriveState(state.mode, fl.z)
+            if fl.end not in (ARRIVAL, EVENT):
+                raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
+                                 "piston does not come back to the stop")
+            for e in fl.events:  # (an arrival's too: the levels crossed on its root, before the impact)
+                state = drive.jump(state.mode, state.z, e, t, q, v)
+                if keep:
+                    events.append((t, e, state.mode, e.crossing_speed(q, v)))
             if fl.end == ARRIVAL:
                 if variational:
                     D = through(model, drive, self.k, before, fl, None, None if carry else D, exact)
                 break
-            if fl.end != EVENT:
-                raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
-                                 "piston does not come back to the stop")
-            for e in fl.events:
-                state = drive.jump(state.mode, state.z, e, t, q, v)
-                if keep:
-                    events.append((t, e, state.mode, e.crossing_speed(q, v)))
             if variational:
                 D = through(model, drive, self.k, before, fl, fl.events, None if carry else D, exact)
         arrival = (t, q.copy(), v.copy(), state)

@@ -366,13 +366,14 @@ def driven_blow(model, drive, state, t, q, v, settings=None):
 def fly_and_switch(model, drive, loop, t_end: float, settings):
     """One flight of a drive's run from ``loop``'s state (:func:`impactbar.drives.flight.fly`): its
     piece logged, the run moved to its end, and at a drive event the drive's jumps applied and the
-    switch logged; returns the flight (its ``end`` says how it ended)."""
+    switch logged (an arrival's too: the events found on its root, the oil circuit's levels, turn their
+    flags before the impact); returns the flight (its ``end`` says how it ended)."""
     mode = loop.state.mode
     fl = fly(model, drive, loop.state, loop.t, loop.q, loop.v, t_end, settings)
     loop.blocks.append(("py", fl.piece))
     loop.t, loop.q, loop.v = fl.t, fl.q, fl.v
     loop.state = DriveState(mode, fl.z)
-    if fl.end == EVENT:
+    if fl.events:
         new = loop.state
         for e in fl.events:
             new = drive.jump(new.mode, new.z, e, fl.t, fl.q, fl.v)

@@ -622,9 +622,11 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     Returns
     -------
     Flight
-        With ``piece`` a :class:`CircuitPiece` and, with ``variational``, ``sensitivity`` the
-        fundamental matrix of ``(q, q', p_f, p_r, p_s, x_v)`` over the flight (before the map of
-        the event that ends it), times ``start``.
+        With ``piece`` a :class:`CircuitPiece`; at an arrival, ``events`` those whose levels CVODE's
+        (or DOP853's) root finding found on the arrival's root (crossed with it: their flags turn
+        before the impact, so that the state handed on agrees with its mode); with ``variational``,
+        ``sensitivity`` the fundamental matrix of ``(q, q', p_f, p_r, p_s, x_v)`` over the flight
+        (before the map of the event that ends it), times ``start``.
 
     Raises
     ------
@@ -702,9 +704,10 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         if start is not None:
             Phi = Phi @ start
     if status == 2:
-        if ARRIVAL_EV in hit:
+        if ARRIVAL_EV in hit:  # (with the drive's events on the same root: the caller turns their flags)
             qe[0] -= float(c @ qe)  # exactly on the stop
-            return Flight(te, qe, ve, ze, ARRIVAL, (), piece, Phi)
+            together = drive._fired(mode, hit) if len(hit) > 1 else ()
+            return Flight(te, qe, ve, ze, ARRIVAL, together, piece, Phi)
         fired = drive._fired(mode, hit)
         if fired:
             return Flight(te, qe, ve, ze, EVENT, fired, piece, Phi)
