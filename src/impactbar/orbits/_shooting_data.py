@@ -9,7 +9,8 @@ import numpy as np
 
 from ..drives.orbitproblem import OrbitData, sorted_multipliers
 
-__all__ = ["orbit_data", "start_mode", "starts_on_stop"]
+__all__ = ["block_mode", "event_pattern", "on_section", "orbit_data", "start_mode", "start_modes",
+           "starts_on_stop"]
 
 
 def starts_on_stop(problem, y) -> bool:
@@ -31,6 +32,102 @@ def starts_on_stop(problem, y) -> bool:
     bool
     """
     return problem.on_stop or float(problem.model.end_weights @ np.asarray(y[:problem.M], dtype=float)) >= 0.0
+
+
+def on_section(problem, y) -> tuple[np.ndarray, bool]:
+    """Where a block's flight of ``problem`` from the unknowns ``y`` starts: its modal positions,
+    projected on the section ``c . q = 0`` where it starts from there (:func:`starts_on_stop`; the
+    unknowns' perturbations leave the section), and whether it does.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        Its ``M`` modal coordinates, its model's end weights ``c`` and its law's trait.
+    y : array_like, shape (n,)
+        The block's unknowns, the modal positions first.
+
+    Returns
+    -------
+    q : numpy.ndarray, shape (M,)
+        A new array: the modal positions the flight starts from.
+    onto : bool
+        Whether they were projected on the section.
+    """
+    q = np.array(y[:problem.M], dtype=float)
+    onto = starts_on_stop(problem, q)
+    if onto:
+        q[0] -= float(problem.model.end_weights @ q)
+    return q, onto
+
+
+def block_mode(problem, mode, y):
+    """The mode a block's flight of ``problem`` from the unknowns ``y`` starts in: the block's
+    ``mode`` as :func:`start_mode` sets it from the flight's start (:func:`on_section`). Every place
+    that flies, reports or returns a block's start mode takes this one (the flights, the event pattern,
+    the blocks of a found orbit), so that the orbit's discrete state agrees with its continuous state.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    mode : hashable
+        The block's mode (fixed from the guess).
+    y : array_like, shape (n,)
+        The block's unknowns ``(q, q', z)``.
+
+    Returns
+    -------
+    hashable
+        ``mode`` itself where the state agrees with it.
+    """
+    M = problem.M
+    q, _ = on_section(problem, y)
+    return start_mode(problem.drive, mode, q, y[M:2 * M], y[2 * M:])
+
+
+def start_modes(problem, X) -> list:
+    """The mode each block's flight of ``problem`` from the unknowns ``X`` starts in: its mode in
+    ``problem.blocks`` (fixed from the guess) as its state there says (:func:`block_mode`: the oil
+    circuit's watched levels' flags turned to the side of the level its state is on).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    X : numpy.ndarray, shape (m n,)
+        The unknowns: the states after each of the ``m`` impacts, stacked.
+
+    Returns
+    -------
+    list
+        One mode per block, in order.
+    """
+    n = problem.n
+    return [block_mode(problem, mode, X[k * n:(k + 1) * n]) for k, (_, mode) in enumerate(problem.blocks)]
+
+
+def event_pattern(problem, X) -> tuple:
+    """The period's sequence of the drive's discrete states at the unknowns ``X`` of ``problem``:
+    per block the mode its flight starts in (:func:`start_modes`), then each event's name and the
+    mode after it, in order (the events on an arrival's root among them).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    X : numpy.ndarray, shape (m n,)
+        The unknowns.
+
+    Returns
+    -------
+    tuple
+        ``("start", mode)`` for each block, followed by its events' ``(name, mode after)``.
+    """
+    n = problem.n
+    out = []
+    for k, mode in enumerate(start_modes(problem, X)):
+        tau = problem.blocks[k][0]
+        out.append(("start", mode))
+        _, _, _, _, _, events, *_ = problem._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)
+        out += [(e.name, after) for _, e, after, _ in events]
+    return tuple(out)
 
 
 def start_mode(drive, mode, q, v, z):

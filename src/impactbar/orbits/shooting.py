@@ -37,7 +37,7 @@ from ._settling import (
     other_period,
     surfaces_ahead,
 )
-from ._shooting_data import orbit_data, start_mode, starts_on_stop
+from ._shooting_data import block_mode, event_pattern, on_section, orbit_data, start_modes
 from .driven_orbit import DrivenOrbit, _constant_load
 
 __all__ = ["ShootingProblem"]
@@ -179,7 +179,9 @@ class ShootingProblem(OrbitProblem):
         ``"state"`` the variational flights' state, the Jacobian not wanted (a coupled blow's not
         taken: ``None`` in its place). The
         last flight is remembered: the same start asked again (an orbit's data, then its
-        admissibility) is not flown again, nor one whose Jacobian is at least as good."""
+        admissibility) is not flown again, nor one whose Jacobian is at least as good. The flight
+        starts in the mode its state says (:func:`._shooting_data.block_mode`), its key too."""
+        mode = block_mode(self, mode, y)
         try:
             key = (float(tau), mode, np.asarray(y, dtype=float).tobytes(), settings)
             hash(key)
@@ -218,11 +220,8 @@ class ShootingProblem(OrbitProblem):
         """:meth:`_flight`, flown."""
         model, drive, M = self.model, self.drive, self.M
         c = model.end_weights
-        t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
-        onto = starts_on_stop(self, q)
-        if onto:
-            q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
-        state = DriveState(start_mode(drive, mode, q, v, z), np.array(z, dtype=float))
+        (q, onto), t, v, z = on_section(self, y), tau, y[M:2 * M], y[2 * M:]
+        state = DriveState(mode, np.array(z, dtype=float))  # (mode: :meth:`_flight`'s, as the state says)
         pieces, events = [], []
         end = tau + HORIZON
         D = None
@@ -692,8 +691,15 @@ class ShootingProblem(OrbitProblem):
         """The period, durations, states, switches and the multipliers of the return map on the
         section after the impacts (the product of the blocks' Jacobians projected on ``c . q = 0``
         times the drive's states); without ``multipliers``, ``nan`` in their place and no
-        monodromy (no Jacobian computed): :func:`._shooting_data.orbit_data`."""
+        monodromy (no Jacobian computed): :func:`._shooting_data.orbit_data`. The blocks' modes
+        become those their flights from ``X`` start in (:meth:`start_modes`: the same flights), so that
+        the orbit's discrete state, read from :attr:`blocks`, is its flights'."""
+        self.blocks = list(zip((tau for tau, _ in self.blocks), self.start_modes(X), strict=True))
         return orbit_data(self, X, multipliers)
+
+    def start_modes(self, X) -> list:
+        """Each block's mode its flight from ``X`` starts in (:func:`._shooting_data.start_modes`)."""
+        return start_modes(self, X)
 
     def blow_records(self, X):
         """The records of the period's blows in order (a drive with state under a law whose contact
@@ -718,15 +724,9 @@ class ShootingProblem(OrbitProblem):
         each event's name and the mode after it, in order. Two solutions (or two flights from
         nearby unknowns) with the same pattern lie on one smooth piece of the problem; a changed
         pattern is a border collision (a switch changing order, a relief valve opening, an
-        accumulator emptying)."""
-        n = self.n
-        out = []
-        for k in range(self.impacts):
-            tau, mode = self.blocks[k]
-            out.append(("start", mode))
-            _, _, _, _, _, events, *_ = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)
-            out += [(e.name, after) for _, e, after, _ in events]
-        return tuple(out)
+        accumulator emptying, a block's state passing a level: its start mode,
+        :meth:`start_modes`, the one its flight starts in): :func:`._shooting_data.event_pattern`."""
+        return event_pattern(self, X)
 
     def pieces(self, X):
         """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""
