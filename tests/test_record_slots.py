@@ -295,6 +295,7 @@ WIDER_NOT_RECORDS = {
     "orbits/_assemble.py": {"t"},  # t: a time grid's first and last
     "orbits/_newton.py": {"t", "z"},  # t: a time grid's first and last; z: a state vector's or grid's entries
     "orbits/_settling.py": {"x"},  # x: a grid's or state's entries
+    "orbits/_shooting_data.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
     # a: a coefficient array's entries; b: a coefficient array's entries; c: a coefficient array's
     # entries; e: a basis vector's or series' entry; g: a grid function's first value
     "orbits/_valve_flow.py": {"a", "b", "c", "e", "g"},
@@ -309,9 +310,8 @@ WIDER_NOT_RECORDS = {
     # impact's; states_after_impact: the first impact's; states_before_impact: the first impact's
     "orbits/orbit.py": {"contacts", "impact_times", "impact_velocities", "states_after_impact",
                         "states_before_impact"},
-    # q: the modal coordinates: [0] the rigid mode; sources: the first source; y: a state vector's
-    # components
-    "orbits/shooting.py": {"q", "sources", "y"},
+    # sources: the first source; y: a state vector's components
+    "orbits/shooting.py": {"sources", "y"},
     # c: a coefficient array's entries; z: a state vector's or grid's entries
     "orbits/valve_admissibility.py": {"c", "z"},
     # G: the cells' first wave; T: a time grid's first and last; h: a one-entry step; z: a state

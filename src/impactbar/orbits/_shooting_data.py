@@ -122,8 +122,7 @@ def event_pattern(problem, X) -> tuple:
     """
     n = problem.n
     out = []
-    for k, mode in enumerate(start_modes(problem, X)):
-        tau = problem.blocks[k][0]
+    for k, ((tau, _), mode) in enumerate(zip(problem.blocks, start_modes(problem, X), strict=True)):
         out.append(("start", mode))
         _, _, _, _, _, events, *_ = problem._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)
         out += [(e.name, after) for _, e, after, _ in events]
