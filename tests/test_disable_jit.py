@@ -1,0 +1,94 @@
+"""The package with numba's JIT disabled (``NUMBA_DISABLE_JIT=1``, numba's way to debug its kernels as
+Python): the kernels run as plain functions, with the compiled kernels' numbers; what needs compiled
+code says so, naming the setting."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+#: a rigid simulate and an 8-mode periodic_orbits as Python, and the oil circuit's refusal
+_RUN = r'''
+import json, sys
+import numba
+from numba.core import config
+from numba.core.dispatcher import Dispatcher
+
+from impactbar import BarModel, CosineLoad, InitialState, periodic_orbits, simulate
+from impactbar.dynamics import _flight
+
+run = simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0), 30.0)
+orbits = periodic_orbits(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0))
+out = {"disabled": bool(config.DISABLE_JIT), "kernel": isinstance(_flight.load_value, Dispatcher),
+       "times": run.impact_times.tolist(), "q": run.final_state.modal_displacement.tolist(),
+       "v": run.final_state.modal_velocity.tolist(),
+       "orbits": [(o.phases.tolist(), o.impact_velocities.tolist()) for o in orbits]}
+if "circuit" in sys.argv:
+    from impactbar import physical as ph
+
+    cfg, _ = ph.read_config("circuit-drifter")
+    try:
+        ph.build(ph.with_values(cfg, {"model.n_modes": 4})).orbit()
+    except RuntimeError as exc:
+        out["circuit"] = str(exc)
+    from impactbar.cli import main
+
+    out["warmup"] = main(["warmup"])
+print(json.dumps(out))
+'''
+
+#: the README's first exact blow as Python
+_BLOW = r'''
+from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
+law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
+print(single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0).efficiency.hex())
+'''
+
+
+def _python(code: str, *args: str) -> subprocess.CompletedProcess:
+    """``code`` run in a new process with numba's JIT disabled."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), NUMBA_DISABLE_JIT="1")
+    return subprocess.run([sys.executable, "-c", code, *args], env=env, capture_output=True, text=True,
+                          check=True, timeout=600)
+
+
+def test_the_kernels_run_as_python_with_the_compiled_numbers_and_the_circuit_refuses():
+    """A rigid ``simulate`` and an 8-mode ``periodic_orbits`` as Python give the compiled run's numbers
+    (here: the same to 1e-12); the oil circuit's flight, whose C callbacks for CVODE must compile,
+    raises a RuntimeError naming the setting, and ``impactbar warmup`` ends with 1 and one line."""
+    from impactbar import BarModel, CosineLoad, InitialState, periodic_orbits, simulate
+
+    done = _python(_RUN, "circuit")
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    assert out["disabled"] and not out["kernel"]  # (the kernels were plain functions)
+    run = simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0), 30.0)
+    assert len(out["times"]) == len(run.impact_times) > 10
+    np.testing.assert_allclose(out["times"], run.impact_times, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(out["q"], run.final_state.modal_displacement, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(out["v"], run.final_state.modal_velocity, rtol=1e-12, atol=1e-12)
+    orbits = periodic_orbits(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0))
+    assert len(out["orbits"]) == len(orbits) > 0
+    for (phases, velocities), o in zip(out["orbits"], orbits, strict=True):
+        np.testing.assert_allclose(phases, o.phases, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(velocities, o.impact_velocities, rtol=1e-12, atol=1e-12)
+    assert "oil circuit's flight" in out["circuit"] and "NUMBA_DISABLE_JIT=1" in out["circuit"]
+    assert out["warmup"] == 1
+    assert "impactbar warmup: error: NUMBA_DISABLE_JIT=1" in done.stderr
+
+
+@pytest.mark.slow
+def test_the_first_exact_blow_runs_as_python_with_the_compiled_efficiency():
+    """The README's first exact blow (``single_blow`` under ``RodRock``) as Python: the compiled
+    blow's efficiency (to 1e-12)."""
+    from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
+
+    efficiency = float.fromhex(_python(_BLOW).stdout.strip().splitlines()[-1])
+    law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
+    blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
+    assert 0.0 < blow.efficiency < 1.0
+    assert efficiency == pytest.approx(blow.efficiency, rel=1e-12, abs=1e-12)
