@@ -92,3 +92,33 @@ def test_the_first_exact_blow_runs_as_python_with_the_compiled_efficiency():
     blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
     assert 0.0 < blow.efficiency < 1.0
     assert efficiency == pytest.approx(blow.efficiency, rel=1e-12, abs=1e-12)
+
+
+def test_the_compile_helpers_leave_plain_functions_as_they_are(monkeypatch):
+    """With the JIT disabled, ``internal_kernels`` changes nothing (0 kernels), still refuses a name
+    that is not one of the module's functions, and ``link_only`` and ``internal_jitable`` give the
+    function back; ``require_jit`` names the setting."""
+    from numba.core import config
+
+    from impactbar._shared import wrappers as W
+
+    def square(x):
+        return x * x
+
+    def area(a, b):
+        return square(a) + square(b)
+
+    ns = {"__name__": square.__module__, "square": square, "area": area, "np": np}
+    monkeypatch.setattr(config, "DISABLE_JIT", True)
+    assert W.jit_disabled()
+    assert W.internal_kernels(ns, python=("area",)) == 0
+    assert ns["area"] is area and area(3, 4) == 25
+    with pytest.raises(ValueError, match=r"python names no kernel of .*\['np'\]"):
+        W.internal_kernels(ns, python=("area", "np"))
+    with pytest.raises(ValueError, match="from_python"):
+        W.link_only(square, "never")
+    assert W.link_only(square) is square and W.internal_jitable(square) is square
+    with pytest.raises(RuntimeError, match="the thing needs compiled code, which NUMBA_DISABLE_JIT=1"):
+        W.require_jit("the thing")
+    monkeypatch.setattr(config, "DISABLE_JIT", False)
+    W.require_jit("the thing")  # (compiled: nothing to refuse)

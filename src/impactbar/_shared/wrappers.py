@@ -44,7 +44,13 @@ _CLASSES: dict = {}
 
 def jit_disabled() -> bool:
     """Whether numba's JIT is disabled (``NUMBA_DISABLE_JIT=1``): its ``njit`` then returns the plain
-    Python function, and nothing compiles."""
+    Python function, and nothing compiles.
+
+    Returns
+    -------
+    bool
+        numba's ``config.DISABLE_JIT``, read when asked.
+    """
     from numba.core import config
 
     return bool(config.DISABLE_JIT)
