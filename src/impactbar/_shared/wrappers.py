@@ -23,16 +23,55 @@ memory block; for the exact blow's workspace, a tuple of 26 arrays, some 300 LLV
 count, about a third of its kernels' LLVM IR, all dead (LLVM deletes them). The lean lowering reads
 only the fields that hold a memory block, on the same path: the same calls to the runtime, in the
 same order, from less IR to build, print, parse and optimise.
+
+With numba's JIT disabled (``NUMBA_DISABLE_JIT=1``, numba's way to run jitted code as Python: its
+``njit`` then returns the plain function, as numba's own decorators do) there are no kernels to
+change: :func:`internal_kernels`, :func:`link_only` and :func:`internal_jitable` leave the functions
+as they are, and Python calls them all.
 """
 
 from __future__ import annotations
 
+import types as _pytypes
+
 from .literals import module_kernels
 
-__all__ = ["internal_kernels", "link_only", "internal_jitable"]
+__all__ = ["internal_kernels", "link_only", "internal_jitable", "jit_disabled", "require_jit"]
 
 _GUARDED: dict = {}
 _CLASSES: dict = {}
+
+
+def jit_disabled() -> bool:
+    """Whether numba's JIT is disabled (``NUMBA_DISABLE_JIT=1``): its ``njit`` then returns the plain
+    Python function, and nothing compiles.
+
+    Returns
+    -------
+    bool
+        numba's ``config.DISABLE_JIT``, read when asked.
+    """
+    from numba.core import config
+
+    return bool(config.DISABLE_JIT)
+
+
+def require_jit(what: str) -> None:
+    """Refuse, with numba's JIT disabled, a computation that cannot run as Python.
+
+    Parameters
+    ----------
+    what : str
+        The computation and what it compiles, as the message names them.
+
+    Raises
+    ------
+    RuntimeError
+        Where ``NUMBA_DISABLE_JIT=1``: the message names ``what`` and the setting.
+    """
+    if jit_disabled():
+        raise RuntimeError(f"{what} needs compiled code, which NUMBA_DISABLE_JIT=1"
+                           " turns off: run it with NUMBA_DISABLE_JIT unset or 0")
 
 
 def _guarded_class(cls, compile_for_python: bool = False):
@@ -225,7 +264,7 @@ def internal_kernels(namespace: dict, python=(), from_python: str = "raise") -> 
     Returns
     -------
     int
-        How many kernels were made link-only.
+        How many kernels were made link-only (none where numba's JIT is disabled).
 
     Raises
     ------
@@ -253,10 +292,15 @@ def internal_kernels(namespace: dict, python=(), from_python: str = "raise") -> 
     _compiles_for_python(from_python)  # (refused before any kernel is changed)
     name = namespace.get("__name__")
     ours = module_kernels(namespace)
+    if jit_disabled():  # (njit gave the module's plain functions: nothing to change, Python calls them)
+        ours = {k: v for k, v in namespace.items()
+                if isinstance(v, _pytypes.FunctionType) and v.__module__ == name}
     python = set(python)
     unknown = python - set(ours)
     if unknown:
         raise ValueError(f"python names no kernel of {name}: {sorted(unknown)}")
+    if jit_disabled():
+        return 0
     n = 0
     for k, disp in ours.items():
         if k in python:
@@ -292,6 +336,9 @@ def link_only(disp, from_python: str = "raise"):
     """
     from numba.core.caching import NullCache
 
+    if jit_disabled():  # (njit gave the plain function: Python calls it)
+        _compiles_for_python(from_python)
+        return disp
     disp._compiler.pipeline_class = _link_only_classes()["compiler"]  # (no wrappers)
     disp._impactbar_cached = not isinstance(disp._cache, NullCache)
     disp._cache = NullCache()
@@ -316,6 +363,8 @@ def internal_jitable(fn):
     """
     from numba.extending import register_jitable
 
+    if jit_disabled():  # (no kernels to compile it into: Python calls it)
+        return fn
     # (the options of the rod and rock's kernels, which call them: numba's overloads that they call
     # are then compiled once for both)
     return register_jitable(pipeline_class=_link_only_classes()["compiler"], no_cpython_wrapper=False,

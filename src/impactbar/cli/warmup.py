@@ -155,9 +155,18 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     """Make the first calls of :func:`_tasks` and print, per call, the CPU time and the number of
-    kernels numba compiled (0 once they are cached)."""
+    kernels numba compiled (0 once they are cached); 1, with one line on stderr, where numba's JIT is
+    disabled (nothing to compile)."""
+    import sys
+
     from numba.core import event
 
+    from .._shared.wrappers import jit_disabled
+
+    if jit_disabled():
+        print("impactbar warmup: error: NUMBA_DISABLE_JIT=1 turns numba's compiler off, so there is "
+              "nothing to compile or cache: run it with NUMBA_DISABLE_JIT unset or 0", file=sys.stderr)
+        return 1
     from ..dynamics.compiled import disable_tiers
 
     disable_tiers()  # every kernel compiled here, not run interpreted while a child compiles it

@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..._shared.bounded import remember
+from ..._shared.wrappers import require_jit
 from . import _bar as K
 
 __all__ = ["FlightData", "flight_data"]
@@ -96,6 +97,7 @@ def _network_code(drive, mode: tuple):
     look-up take some 100 microseconds, against a flight's milliseconds)."""
     from . import _netgen
 
+    require_jit("the oil circuit's flight (CVODE's C callbacks, compiled by numba.cfunc)")
     net = drive._network(mode)
     return net, _netgen.generate(net)
 
