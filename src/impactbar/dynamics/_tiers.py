@@ -215,7 +215,9 @@ class _Twin:
 def interpreted_first(disp, budget: float = FIRST_BUDGET, scratch: tuple = ()):
     """What runs the next call of the kernel ``disp``, whatever the tier: its machine code where
     numba holds it, in this process or in its cache, or once the process has spent ``budget`` CPU
-    seconds in its twin (numba compiles it then); else its twin, which gives the machine code's bits.
+    seconds in its twin (numba compiles it then); else its twin, which gives the machine code's bits
+for the real arithmetic the kernels it serves do (not for every kernel: numpy divides a complex
+scalar by its reciprocal's product, numba as CPython does, an ulp apart in some 40 % of quotients).
 
     For a kernel whose compile costs far more than the calls of a short computation: the
     admissibility search (theory §5) compiles in some 5 to 9 s of CPU time (with its callees,
