@@ -53,7 +53,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: the child's listener of numba's compiles (also ``probes/circuit_first_compiles.py``'s): each kernel's
 #: own CPU time in ``own``, its compiles in ``count``, by ``name``, and each of the package's kernels'
-#: signatures (its arguments' types) in ``sigs``
+#: signatures (its arguments' types) in ``sigs``, by name and dispatcher
 _LISTENER = r"""
 import json, sys, time
 from collections import defaultdict
@@ -75,8 +75,8 @@ class Listener(event.Listener):  # each kernel's compile time, its callees' comp
         dt = time.process_time() - t
         own[name(fn)] += dt
         count[name(fn)] += 1
-        if fn.__module__.startswith("impactbar"):
-            sigs[name(fn)].append([str(a) for a in ev.data["args"]])
+        if fn.__module__.startswith("impactbar"):  # (by dispatcher: two made of one function are two)
+            sigs[name(fn) + "@" + hex(id(ev.data["dispatcher"]))].append([str(a) for a in ev.data["args"]])
         if stack:
             own[name(stack[-1][0])] -= dt
 
@@ -140,7 +140,7 @@ else:
 top = sorted(own.items(), key=lambda kv: -kv[1])
 print(json.dumps(dict(out, first=first, compiles=compiles(), digest=digest,
                       kernels=[(k, v, count[k]) for k, v in top],
-                      twice={k: v for k, v in sigs.items() if len(v) > 1})))
+                      twice={k.split("@")[0]: v for k, v in sigs.items() if len(v) > 1})))
 """
 
 #: row: (title, goal in CPU seconds, the figure is the whole child's CPU time)
@@ -246,7 +246,7 @@ def main(argv=None) -> int:
         print(f"{title:<52} {cells} {now['first']:>9.1f} {goal:>6.0f}  {'met' if met else 'MISSED':<7}"
               f" {comp:>13} {warm}", flush=True)
         notes = [f"{k} {v:.2f}" if isinstance(v, float) else f"{k} {v}" for k, v in now.items()
-                 if k not in ("first", "compiles", "digest", "kernels", "whole", "warm")]
+                 if k not in ("first", "compiles", "digest", "kernels", "whole", "warm", "twice")]
         if not ROWS[row][2] and row != "cluster":
             notes.append(f"whole process {now['whole']:.1f} s")
         if base and row != "cluster":
