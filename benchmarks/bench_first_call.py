@@ -32,7 +32,9 @@ the first filled (``warm``). With ``--against SRC`` (a package tree, the folder 
 ``impactbar``) that tree is timed too, alternately with this one, and the rows' results (a digest of
 each call's numbers) are compared to the bit. A row that misses its goal lists its ``--kernels K``
 slowest kernels to compile (each kernel's own CPU time, its callees' compiles taken out, summed
-over its signatures, and how many signatures it compiled for): the reason.
+over its signatures, and how many signatures it compiled for): the reason. Every row lists, per
+tree, the package's kernels compiled for more than one signature, with the arguments whose types
+differ (a literal constant, an integer's width, an array's layout or writability, ...).
 """
 
 from __future__ import annotations
@@ -50,13 +52,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 #: the child's listener of numba's compiles (also ``probes/circuit_first_compiles.py``'s): each kernel's
-#: own CPU time in ``own``, its compiles in ``count``, by ``name``
+#: own CPU time in ``own``, its compiles in ``count``, by ``name``, and each of the package's kernels'
+#: signatures (its arguments' types) in ``sigs``, by name and dispatcher
 _LISTENER = r"""
 import json, sys, time
 from collections import defaultdict
 from numba.core import event
 
-own, count, stack = defaultdict(float), defaultdict(int), []
+own, count, sigs, stack = defaultdict(float), defaultdict(int), defaultdict(list), []
 
 
 def name(fn):
@@ -72,6 +75,8 @@ class Listener(event.Listener):  # each kernel's compile time, its callees' comp
         dt = time.process_time() - t
         own[name(fn)] += dt
         count[name(fn)] += 1
+        if fn.__module__.startswith("impactbar"):  # (by dispatcher: two made of one function are two)
+            sigs[name(fn) + "@" + hex(id(ev.data["dispatcher"]))].append([str(a) for a in ev.data["args"]])
         if stack:
             own[name(stack[-1][0])] -= dt
 
@@ -134,7 +139,8 @@ else:
     raise SystemExit("unknown row " + row)
 top = sorted(own.items(), key=lambda kv: -kv[1])
 print(json.dumps(dict(out, first=first, compiles=compiles(), digest=digest,
-                      kernels=[(k, v, count[k]) for k, v in top])))
+                      kernels=[(k, v, count[k]) for k, v in top],
+                      twice={k.split("@")[0]: v for k, v in sigs.items() if len(v) > 1})))
 """
 
 #: row: (title, goal in CPU seconds, the figure is the whole child's CPU time)
@@ -197,6 +203,15 @@ def first_call(src: str, row: str, warm: bool = False) -> dict:
     return r
 
 
+def _differing(signatures: list) -> str:
+    """The arguments in which a kernel's signatures differ (a literal, a dtype, a layout, ...): each
+    such argument's position and its types, ``"arg 2: int64 | Literal[int](1)"``."""
+    if len({len(s) for s in signatures}) > 1:
+        return "argument counts " + " | ".join(str(len(s)) for s in signatures)
+    return ", ".join(f"arg {i}: " + " | ".join(dict.fromkeys(s[i] for s in signatures))
+                     for i in range(len(signatures[0])) if len({s[i] for s in signatures}) > 1)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rows", nargs="+", choices=tuple(ROWS), metavar="ROW",
@@ -231,7 +246,7 @@ def main(argv=None) -> int:
         print(f"{title:<52} {cells} {now['first']:>9.1f} {goal:>6.0f}  {'met' if met else 'MISSED':<7}"
               f" {comp:>13} {warm}", flush=True)
         notes = [f"{k} {v:.2f}" if isinstance(v, float) else f"{k} {v}" for k, v in now.items()
-                 if k not in ("first", "compiles", "digest", "kernels", "whole", "warm")]
+                 if k not in ("first", "compiles", "digest", "kernels", "whole", "warm", "twice")]
         if not ROWS[row][2] and row != "cluster":
             notes.append(f"whole process {now['whole']:.1f} s")
         if base and row != "cluster":
@@ -239,6 +254,10 @@ def main(argv=None) -> int:
                          else "results DIFFERENT")
         if notes:
             print("    " + "; ".join(notes))
+        for label, r in best.items():
+            if r.get("twice"):
+                print(f"    {label}: compiled for more than one signature: " + "; ".join(
+                    f"{k} {len(v)} ({_differing(v)})" for k, v in sorted(r["twice"].items())))
         if not met and now.get("kernels"):
             print("    slowest to compile (own CPU s, signatures): " + ", ".join(
                 f"{k} {v:.1f} ({c})" for k, v, c in now["kernels"][:a.kernels]))

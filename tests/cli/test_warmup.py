@@ -124,3 +124,41 @@ def test_after_warmup_a_new_process_compiles_nothing(tmp_path):
     assert runs[1].returncode == 0, err_again
     assert out.strip().splitlines()[-1] == "[]"
     assert again.strip().splitlines()[-1].startswith("0 kernels compiled")
+
+
+_ONE_SIGNATURE = r"""
+import gc
+import sys
+from numba.core.dispatcher import Dispatcher
+from impactbar.cli.warmup import _tasks
+
+for label, call in _tasks():
+    if label in sys.argv[1:]:
+        call()
+for obj in gc.get_objects():
+    if isinstance(obj, Dispatcher) and obj.py_func.__module__.startswith("impactbar"):
+        print(obj.py_func.__module__ + "." + obj.py_func.__name__, len(obj.signatures))
+"""
+
+
+@pytest.mark.slow  # about 25 s of CPU: three of the warm-up's calls compiled into an empty cache
+def test_the_warmups_bar_valve_and_chunk_kernels_take_one_signature_each(tmp_path):
+    """The warm-up's calls of 40 modes, the position-switched drive and the rigid sweep's chunks in a new
+    process with an empty cache: each of the package's kernels (a dispatcher: ``run_free`` and
+    ``run_free_rigid`` are two of one function, the second not called here) compiles one signature,
+    among them those that a constant or a float argument compiled twice (``_aberth._cdiv`` of one,
+    the valve loop's ``_push`` and ``run_free`` with its constants, the rigid chunks' ``_verdict``
+    with ``ng = 0``)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    labels = ["periodic orbits, 40 modes and more", "position-switched drive", "rigid sweep chunks"]
+    done = subprocess.run([sys.executable, "-c", _ONE_SIGNATURE, *labels], env=env, capture_output=True,
+                          text=True, check=True)
+    counts = {}
+    for line in done.stdout.strip().splitlines():
+        kernel, n = line.split()
+        counts.setdefault(kernel, []).append(int(n))
+    for kernel in ("impactbar.dynamics._aberth._cdiv", "impactbar.drives.valve._compiled_loop._push",
+                   "impactbar.dynamics._event_loop._run_free", "impactbar.orbits._rigid_scalar._verdict"):
+        assert max(counts.get(kernel, [0])) == 1, (kernel, counts.get(kernel))
+    assert {k: n for k, n in counts.items() if max(n) > 1} == {}

@@ -20,18 +20,18 @@ __all__ = ["add_parser", "run", "KERNELS", "KERNELS_NUMBA", "kernel_count"]
 #: quotes their sum, :func:`kernel_count` (``tests/docs/test_quoted_numbers.py``)
 KERNELS = {
     "periodic orbits, flexible bar": 40,
-    "periodic orbits, 40 modes and more": 13,
+    "periodic orbits, 40 modes and more": 12,
     "periodic orbits, wave law": 25,
     "simulation, rigid bar": 16,
     "simulation, flexible bar": 6,
     "simulation, wave law": 12,
-    "position-switched drive": 13,
+    "position-switched drive": 11,
     "rod and rock": 78,
     "rod and rock orbits, exact blows": 16,
     "rod and rock orbits, lattice": 22,
-    "rigid sweep chunks": 26,
+    "rigid sweep chunks": 25,
     "oil circuit": 81,
-    "oil circuit on rod and rock": 24,
+    "oil circuit on rod and rock": 18,
     "piston optimiser": 11,
 }
 

@@ -14,6 +14,10 @@ import numpy as np
 
 from ._event_loop import CACHE
 
+#: one, complex: :func:`_cdiv`'s numerator where a caller divides one by a complex (a complex argument
+#: like every other call's, so that ``_cdiv`` compiles once; a float's imaginary part is 0.0 too)
+ONE = complex(1.0, 0.0)
+
 
 @numba.njit(cache=CACHE, nogil=True, fastmath=False)
 def _cdiv(a, b):
@@ -54,7 +58,7 @@ def _correction(xi, s, ds, s89, ut, acr, aci):
     s1 = complex(s[2], s[3])
     s2 = complex(s[4], s[5])
     s3 = complex(s[6], s[7])
-    wt = _cdiv(1.0, 1.0 - xi)
+    wt = _cdiv(ONE, 1.0 - xi)
     w2 = wt * wt
     # S = [[S00, S01], [S10, S11]] and its derivative [[D00, D01], [D10, D11]]
     S00 = 1.0 + wt * ut[0]
@@ -67,8 +71,8 @@ def _correction(xi, s, ds, s89, ut, acr, aci):
     D11 = s3 + complex(ds[2], ds[3]) + xi * complex(ds[6], ds[7])
     detS = S00 * S11 - S01 * S10
     trSS = _cdiv(S11 * D00 - S01 * D10 - S10 * D01 + S00 * D11, detS)
-    logd = 2.0 * xi * complex(s89[0], s89[1]) - complex(s89[2], s89[3]) - wt + trSS - _cdiv(1.0, xi)
-    newton = _cdiv(1.0, logd)
+    logd = 2.0 * xi * complex(s89[0], s89[1]) - complex(s89[2], s89[3]) - wt + trSS - _cdiv(ONE, xi)
+    newton = _cdiv(ONE, logd)
     return _cdiv(newton, 1.0 - newton * complex(acr, aci))
 
 

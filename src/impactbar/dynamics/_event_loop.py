@@ -19,6 +19,7 @@ import math
 import numba
 import numpy as np
 
+from .._shared.literals import plain_literals
 from .._shared.wrappers import internal_kernels
 from ._crossing import (  # the certified event search, below this module
     FAIL,
@@ -277,6 +278,7 @@ propagate_many = numba.njit(cache=CACHE, nogil=True)(_propagate)
 #: :func:`_propagate` called from compiled code (``load`` and ``B`` as the views)
 _propagate_many = numba.njit(cache=CACHE, nogil=True)(_propagate)
 
+plain_literals(globals())  # one machine code per kernel for all constant arguments (run_free's max_imp 1)
 # the kernels Python calls keep their wrapper and cache entry; the other (propagate_views) is
 # link-only, for kernels
 internal_kernels(globals(), python=("run_free", "run_free_rigid", "propagate_many"))

@@ -28,6 +28,7 @@ import types
 import numba
 import numpy as np
 
+from .._shared.literals import plain_literals
 from ..dynamics.compiled import CACHE, sort_head
 from . import _rigid_scalar
 
@@ -42,14 +43,17 @@ def _compiled(names) -> dict:
     """numba's copies of the functions ``names`` of :mod:`._rigid_scalar` (the reference), made from
     its code: each copy runs in the reference module's globals with every one of ``names`` replaced
     by its copy, so that the copies call one another compiled (cached as the reference's functions,
-    next to its source)."""
+    next to its source), each once for all constant arguments (:func:`plain_literals`: ``_verdict``'s
+    ``ng = 0``)."""
     scope = dict(vars(_rigid_scalar))
     for name in names:
         f = getattr(_rigid_scalar, name)
         copy = types.FunctionType(f.__code__, scope, f.__name__, f.__defaults__, f.__closure__)
         copy.__qualname__ = f.__qualname__
         scope[name] = numba.njit(**_JIT)(copy)
-    return {name: scope[name] for name in names}
+    copies = {name: scope[name] for name in names}
+    plain_literals(dict(copies, __name__=_rigid_scalar.__name__))
+    return copies
 
 
 _copies = _compiled(_rigid_scalar.SHARED)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numba as nb
 
+from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 
@@ -104,4 +105,5 @@ def bar_events(y, par, M, g):
     g[IN_EV] = -y[0] - par[XIN] if par[ARMI] > 0.5 else 1.0
 
 
+plain_literals(globals())  # one machine code per kernel for all constant arguments (end_motion's M = 1)
 internal_kernels(globals(), from_python="compile")  # the generated kernels call them: link-only

@@ -26,6 +26,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
+from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from . import _sundials as S
@@ -338,6 +339,9 @@ def _steps(mem, yvec, flag, t0, y0, t_end, directions, par, keep, max_steps):
             break
     _clear_stop(mem)
     return flag, T[:k].copy(), Y[:k].copy(), y.copy(), roots
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (fly's keep: NE)
 
 
 def _swap_ops(LS, ctx) -> bool:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.compiled import CACHE
 from . import _cvode as CV  # noqa: F401  (the SUNDIALS libraries bound: a module that imports this flies compiled)
 from . import _endgen as EK
@@ -94,3 +95,6 @@ def _grow(T, Y, F, k, need):
             Y2[r, i] = Y[r, i]
             F2[r, i] = F[r, i]
     return T2, Y2, F2
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (_grow's first row 0)

@@ -133,6 +133,7 @@ from impactbar.drives.circuit.kinds import spool as KIND_spool
 from impactbar.drives.circuit.kinds import spool_port as KIND_spool_port
 from impactbar.drives.circuit.kinds._flow import dphi, phi
 from impactbar.drives.circuit.kinds.level import _off_level
+from impactbar._shared.literals import plain_literals
 from impactbar._shared.wrappers import internal_kernels
 from impactbar.dynamics.compiled import CACHE
 
@@ -222,8 +223,11 @@ def magnus_phi(t, y, f, par, M, theta, d):
 '''
 
 _CALLBACKS = '''
-# -- the kernels that only kernels call: link-only (compiled again from Python, where a test calls one);
-# then CVODE's C callbacks, each compiled at its first use (_cvode.Callback) --
+# -- the kernels typed on their arguments' types, not the constants a caller passes (one machine code
+# for the end flight's M = 1 and a variable M); those that only kernels call link-only (compiled again
+# from Python, where a test calls one); then CVODE's C callbacks, each compiled at its first use
+# (_cvode.Callback) --
+plain_literals(globals())
 internal_kernels(globals(), python=("jac_base", "field_at", "magnus_phi", "dop853_fly"),
                  from_python="compile")
 

@@ -22,6 +22,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.compiled import CACHE, END, MAXIMP, propagate_views, run_free
 from ...dynamics.compiled_views import LoadKernelView, ModalBasisView
 from .._crossing import first_rising_crossing, gap, rate_zero, rigid_flight
@@ -348,3 +349,6 @@ def run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     """:func:`_run_switched` called from Python, with the views as plain tuples (``tuple(view)``:
     numba dispatches them several times faster than named tuples)."""
     return _run_switched(loads, B, DriveKernelView(*drive), R, c, clock, state, ints, pending, logs)
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (_push's RETURN, STROKE)
