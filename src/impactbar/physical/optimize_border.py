@@ -33,6 +33,15 @@ per success: the least of its failures' so far), :math:`t^* = \rho / |d|`, and
 model of the constraint points back across the border. The model costs a failed design no orbit
 and at most one gradient, its nearest success's, computed once for all the failures that lie
 nearest it (and kept with SLSQP's in the cache file).
+
+The multistart's polish (SLSQP, :mod:`~impactbar.physical.optimize_polish`) scores a failed design
+by the same model, built from the gradients it computes itself (the step refined where it meets a
+border; the record says which), and is given the model's gradients with it: the nearest success's
+for the objective and the margins, and for the existence constraint :func:`existence_gradient`, the
+model's own (exact; the model is first order in the step). The existence margin is the multiplier's
+alone: at the documented problem's designs without an orbit, none of the other margins the orbit
+reports for its borders (the impact velocity, the gap's rate at the valve's switch, the circuit's
+pressure borders) goes to zero where the orbit ends (the docs' page, "Optimising a drifter").
 """
 
 from __future__ import annotations

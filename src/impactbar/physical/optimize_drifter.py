@@ -14,7 +14,9 @@ per success, kept), and a constraint more, "the one-impact orbit exists", the ex
 largest Floquet multiplier's modulus to the unit circle), negative there, its zero where that margin
 extrapolates to zero, as a design map locates a border (else at a radius from the success); only in
 the circuit's ideal limit, with no orbit to extrapolate, is a failed design objective 1 and every
-constraint -1. With ``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
+constraint -1. The multistart's polish scores a failed design by the same model and is given the same
+constraint, with their gradients (:mod:`~impactbar.physical.optimize_polish`). With
+``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
 the constraints by the implicit function theorem on each design's orbit
 (:func:`~impactbar.physical.sensitivity.tangent_derivatives`: four flights per variable, no orbit
 solved), a key across a border within the step by central differences of orbits continued from the

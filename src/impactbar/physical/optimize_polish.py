@@ -117,23 +117,27 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
             best.update(x=v, fun=value, improved=True)
         return v, value
 
-    def modelled(v):  # a design without an orbit: the border model's scores (None: the penalty)
-        return None if border is None else border(v)
+    def modelled(v):
+        """A design without an orbit: the border model's objective and margins, else the penalty's
+        (objective ``-ref``: 1 as SLSQP sees it, every margin -1)."""
+        scores = None if border is None else border(v)
+        if scores is None:
+            return -ref, -np.ones(m)
+        value, by_model = scores
+        return value, np.asarray(by_model, dtype=float)
 
     def f(v):
         v, value = visit(v)
         if value is None:
-            scores = modelled(v)
-            return 1.0 if scores is None else -scores[0] / ref
+            value, _ = modelled(v)
         return -value / ref
 
     def g(v):
         v, value = visit(v)
-        if value is not None:
-            out = np.asarray(margins(v), dtype=float)
+        if value is None:
+            _, out = modelled(v)
         else:
-            scores = modelled(v)
-            out = -np.ones(m) if scores is None else np.asarray(scores[1], dtype=float)
+            out = np.asarray(margins(v), dtype=float)
         return out if existence is None else np.append(out, existence(v))
 
     def df(v):  # the objective's gradient, scaled as f
