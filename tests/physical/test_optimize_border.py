@@ -215,8 +215,9 @@ def test_the_polish_meeting_the_no_orbit_band_sees_the_border_model_and_its_grad
     start = next(m for m in met if m[0] == "f")  # (the polish's objective scaled by its start's)
     ref = abs(start[2]["objectives"][FKEY])
     failed = {rec["id"]: rec for *_, rec in met if not rec["ok"]}
-    assert start[1] == -1.0
-    assert {n for n, _, rec in met if not rec["ok"]} == {"f", "c0", "jac"}, "make the problem meet a failure"
+    assert start[1] == -1.0 and failed, "the polish met no design without an orbit: make the problem meet one"
+    J = _against_fresh_differences(res, list(failed.values()), evaluate)
+    assert {n for n, _, rec in met if not rec["ok"]} == {"f", "c0", "jac"}
     for name, value, rec in met:
         if rec["ok"]:
             assert name != "c0" or value[-1] >= 0.0
@@ -230,7 +231,6 @@ def test_the_polish_meeting_the_no_orbit_band_sees_the_border_model_and_its_grad
         else:  # the Jacobian: the margins' rows the nearest success's, the last the existence's
             assert np.any(value[:-1] != 0.0) and np.any(value[-1] != 0.0)
             assert np.all(np.isfinite(value)) and value.shape == (len(b["margins"]) + 1, 2)
-    J = _against_fresh_differences(res, list(failed.values()), evaluate)
     for name, value, rec in met:  # the Jacobian's margins against the fresh orbits' differences
         if name == "jac" and not rec["ok"]:
             Js = J[rec["border"]["nearest"]][1:]
