@@ -279,6 +279,35 @@ def test_the_polish_takes_a_search_s_design_to_a_certified_optimum():
         polish(objective, margins, gradients, u, designs=0)
 
 
+def test_the_polish_scores_a_design_without_a_value_by_the_border_model_given():
+    r"""The largest :math:`u_0 + 2u_1` in the unit disc where only :math:`u_0 + u_1 \le 1.3` has values
+    (no orbit beyond; the disc's optimum :math:`(1, 2)/\sqrt 5` lies there): with the far side scored by
+    a border model (the objective and the disc's margin extrapolated, exact here) and the existence
+    constraint :math:`1.3 - u_0 - u_1` with its gradient, the polish ends where both hold, at the
+    closed form's corner :math:`u_0 = (1.3 - \sqrt{0.31})/2` to 1e-6, a design with a value; the
+    constraint without its gradient is refused in one line."""
+    from impactbar.physical.optimize_polish import polish
+
+    objective, margins, gradients, _ = _disc()
+    seen = []
+
+    def valued(v):
+        return objective(v) if v[0] + v[1] <= 1.3 + 1e-9 else None
+
+    def border(v):
+        seen.append(v.copy())
+        return objective(v), margins(v)
+
+    res = polish(valued, margins, gradients, [0.4, 0.8], designs=40, border=border,
+                 existence=lambda v: 1.3 - v[0] - v[1], d_existence=lambda v: np.array([-1.0, -1.0]))
+    corner = (1.3 - math.sqrt(0.31)) / 2.0
+    assert res.improved and valued(res.x) is not None
+    np.testing.assert_allclose(res.x, [corner, 1.3 - corner], atol=1e-6)
+    assert all(v[0] + v[1] > 1.3 + 1e-9 for v in seen)  # (asked only where there is no value)
+    with pytest.raises(ValueError, match=r"^existence and d_existence: give both"):
+        polish(valued, margins, gradients, [0.4, 0.8], designs=40, existence=lambda v: 1.0)
+
+
 def test_the_polish_runs_slsqp_on_one_blas_thread_whatever_the_caller_s():
     """SLSQP's iterates differ in their last bits between one and two OpenBLAS threads (the documented
     multistart's polish, replayed from its stored designs: its third iterate's pre-charge 0 against

@@ -33,6 +33,15 @@ per success: the least of its failures' so far), :math:`t^* = \rho / |d|`, and
 model of the constraint points back across the border. The model costs a failed design no orbit
 and at most one gradient, its nearest success's, computed once for all the failures that lie
 nearest it (and kept with SLSQP's in the cache file).
+
+The multistart's polish (SLSQP, :mod:`~impactbar.physical.optimize_polish`) scores a failed design
+by the same model, built from the gradients it computes itself (the step refined where it meets a
+border; the record says which), and is given the model's gradients with it: the nearest success's
+for the objective and the margins, and for the existence constraint :func:`existence_gradient`, the
+model's own (exact; the model is first order in the step). The existence margin is the multiplier's
+alone: at the documented problem's designs without an orbit, none of the other margins the orbit
+reports for its borders (the impact velocity, the gap's rate at the valve's switch, the circuit's
+pressure borders) goes to zero where the orbit ends (the docs' page, "Optimising a drifter").
 """
 
 from __future__ import annotations
@@ -42,7 +51,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["EXISTENCE", "BorderScore", "border_score", "existence_margin"]
+__all__ = ["EXISTENCE", "BorderScore", "border_score", "existence_gradient", "existence_margin"]
 
 #: The name of the constraint the border model adds: the one-impact orbit exists.
 EXISTENCE = "one_impact_orbit"
@@ -159,3 +168,55 @@ def border_score(u, near_u, objective: float, margins, exists: float, d_objectiv
     length = float(np.linalg.norm(d))
     rho = min(radius, 0.5 * length)
     return BorderScore(obj, mar, exists * (1.0 - length / rho), rho / length, "radius", rho)
+
+
+def existence_gradient(u, near_u, score: BorderScore, exists: float, d_exists=None) -> np.ndarray:
+    r"""The gradient of a failed design's existence constraint as :func:`border_score` scores it, in the
+    scaled variables, the nearest success :math:`u_s`, its margin :math:`e_s` and the border radius
+    :math:`\rho` held (the model's own gradient, exact; the model is first order in the step): where
+    the margin locates the border, :math:`\nabla e_s`; at the radius,
+    :math:`-e_s\, d / (|d|\, \rho)` (:math:`e_s (1 - |d|/\rho)` differentiated); for a success past
+    the unit circle, :math:`\nabla e_s` where the margin falls along the step, else 0 (theory §11,
+    "Optimising a drifter").
+
+    Parameters
+    ----------
+    u, near_u : array_like, shape (n,)
+        The failed design and its nearest success, scaled variables.
+    score : BorderScore
+        :func:`border_score`'s at ``u`` from ``near_u``.
+    exists : float
+        The success's existence margin.
+    d_exists : array_like, shape (n,), optional
+        Its gradient (``None``: not known, as :func:`border_score` was given).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The constraint's gradient in the scaled variables.
+
+    Raises
+    ------
+    ValueError
+        ``u`` and ``near_u`` the same design, or ``score`` located neither way.
+
+    Examples
+    --------
+    At the radius 0.5 of a step of 1 along the first variable, the margin 0.2 falls by 0.4 per unit:
+
+    >>> s = border_score([1.0, 0.0], [0.0, 0.0], 2.0, [0.5], 0.2, [1.0, 0.0], [[-0.1, 0.0]])
+    >>> existence_gradient([1.0, 0.0], [0.0, 0.0], s, 0.2).tolist()
+    [-0.4, -0.0]
+    """
+    u, near_u = np.asarray(u, dtype=float), np.asarray(near_u, dtype=float)
+    d = u - near_u
+    if u.shape != near_u.shape or not np.any(d):
+        raise ValueError("u and near_u must be two different designs of the same shape")
+    grad = np.zeros(d.size) if d_exists is None else np.asarray(d_exists, dtype=float).reshape(d.size)
+    if score.located == "radius":
+        return -exists * d / (float(np.linalg.norm(d)) * score.radius)
+    if score.located != "margin":
+        raise ValueError(f"score.located must be 'margin' or 'radius'; got {score.located!r}")
+    if exists <= 0.0 and not float(np.dot(grad, d)) < 0.0:
+        return np.zeros(d.size)
+    return grad

@@ -14,7 +14,9 @@ per success, kept), and a constraint more, "the one-impact orbit exists", the ex
 largest Floquet multiplier's modulus to the unit circle), negative there, its zero where that margin
 extrapolates to zero, as a design map locates a border (else at a radius from the success); only in
 the circuit's ideal limit, with no orbit to extrapolate, is a failed design objective 1 and every
-constraint -1. With ``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
+constraint -1. The multistart's polish scores a failed design by the same model and is given the same
+constraint, with their gradients (:mod:`~impactbar.physical.optimize_polish`). With
+``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
 the constraints by the implicit function theorem on each design's orbit
 (:func:`~impactbar.physical.sensitivity.tangent_derivatives`: four flights per variable, no orbit
 solved), a key across a border within the step by central differences of orbits continued from the
@@ -60,7 +62,7 @@ from .display_units import written_quantity
 from .drifter import Drifter
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
-from .optimize_border import EXISTENCE, border_score, existence_margin
+from .optimize_border import EXISTENCE, BorderScore, border_score, existence_gradient, existence_margin
 from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
 from .optimize_failures import classify_listed, failed_record
 from .optimize_integers import integer_search
@@ -421,29 +423,35 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         # and every constraint -1, only where no design has an orbit to extrapolate: the ideal limit)
         scale = constraint_output("max_multiplier", kind).scale or abs(limits.get("max_multiplier", 0.95))
 
-        def border(rec: dict) -> dict | None:
+        def border(rec: dict, which: str = "default") -> dict | None:
             """A failed design's scores by the border model, kept in its record (``None``: no design
             with an orbit, the ideal limit's): from the nearest design evaluated with an orbit (a
-            sample's too, its gradient then from a fresh orbit)."""
+            sample's too, its gradient then from a fresh orbit), by its gradients of kind ``which``
+            (``"default"``, the search's; ``"refined"``, the polish's), the record's ``gradient``."""
             if "border" not in rec and not ideal:
                 u = points[rec["id"]]
                 success = min((r for r in history if r["ok"]),
                               key=lambda r: float(np.sum((points[r["id"]] - u) ** 2)))
                 nid, at = success["id"], points[success["id"]]
-                if kind == "circuit":  # (a valve drifter's figures have no such gradients: held)
-                    grad = derivative(at)
-                    d_exists = grad.constraints[list(limits).index("max_multiplier")] if (
-                        "max_multiplier" in limits) else None
-                else:
-                    grad, d_exists = _Gradients(np.zeros(len(keys)), np.zeros((len(limits), len(keys)))), None
+                grad, d_exists = exists_model(at, which)
                 radius = min((r["border"]["radius"] for r in history if "radius" in r.get("border", {})
                               and r["border"]["nearest"] == nid), default=math.inf)
                 s = border_score(u, at, success["objectives"][fkey], [c["scaled"] for c in success[
                     "constraints"].values()], existence_margin(success, scale), *grad, d_exists, radius)
                 rec["border"] = {"nearest": nid, "objective": s.objective, "margins": s.margins.tolist(),
                                  EXISTENCE: s.exists, "t": s.t, "located": s.located,
-                                 **({"radius": s.radius} if s.located == "radius" else {})}
+                                 **({"radius": s.radius} if s.located == "radius" else {}),
+                                 **({} if which == "default" else {"gradient": which})}
             return rec.get("border")
+
+        def exists_model(at, which: str):
+            """A success's gradients of kind ``which`` and its existence margin's (``None``: not known);
+            a valve drifter's figures have no such gradients: held (zeros)."""
+            if kind != "circuit":
+                return _Gradients(np.zeros(len(keys)), np.zeros((len(limits), len(keys)))), None
+            grad = model_gradient(at, which)
+            return grad, (grad.constraints[list(limits).index("max_multiplier")] if "max_multiplier" in limits
+                          else None)
 
         def f(u):
             rec = evaluate(u)
@@ -484,14 +492,46 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                         write_cache(cache_path, tag, store, stored_gradients)
             return gradients[key]
 
-        def derivative(u):  # (a failed design's: its nearest success's, the border model's gradient)
+        def model_gradient(u, which: str = "default"):
+            """A design's gradients of kind ``which`` (the polish's ``"refined"``: the step refined
+            where it meets a border, _refined_gradient); a failed design's, its border model's: those
+            of its nearest success, of the kind the model used."""
             rec = evaluate(u)
-            if not rec["ok"] and border(rec) is not None:
-                u = points[rec["border"]["nearest"]]
-            return gradient_of(u, "default", _design_gradient)
+            if not rec["ok"] and border(rec, which) is not None:
+                u, which = points[rec["border"]["nearest"]], rec["border"].get("gradient", "default")
+            return gradient_of(u, which, _design_gradient if which == "default" else _refined_gradient)
 
-        def refined(u):  # the polish's: the step refined where it meets a border (_refined_gradient)
-            return gradient_of(u, "refined", _refined_gradient)
+        def derivative(u):  # (SLSQP's and the border model's)
+            return model_gradient(u)
+
+        def refined(u):  # the polish's
+            return model_gradient(u, "refined")
+
+        def polish_border(u):  # the polish's scores of a failed design (optimize_polish.polish's border)
+            b = border(evaluate(u), "refined")
+            return None if b is None else (b["objective"], np.asarray(b["margins"], dtype=float))
+
+        def polish_exists(u):  # the polish's constraint "the one-impact orbit exists" (its model's)
+            rec = evaluate(u)
+            if not rec["ok"]:
+                border(rec, "refined")
+            return exists(u)
+
+        def d_existence(u):
+            """The gradient of the polish's existence constraint: at a design with an orbit its
+            existence margin's (0 where that is clipped at 0), at a failed design the border model's
+            (optimize_border.existence_gradient)."""
+            rec = evaluate(u)
+            if rec["ok"]:
+                _, d_e = exists_model(u, "refined")
+                return np.zeros(len(keys)) if d_e is None or existence_margin(rec, scale) <= 0.0 else d_e
+            b = border(rec, "refined")
+            success = next(r for r in history if r["id"] == b["nearest"])
+            _, d_e = exists_model(points[b["nearest"]], b.get("gradient", "default"))
+            s = BorderScore(b["objective"], np.asarray(b["margins"]), b[EXISTENCE], b["t"], b["located"],
+                            b.get("radius", math.nan))
+            return existence_gradient(points[rec["id"]], points[b["nearest"]], s,
+                                      existence_margin(success, scale), d_e)
 
         if method == "differential_evolution":
             res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
@@ -509,7 +549,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
             if found and polish:
                 polished = polish_search(evaluate, g, refined, history, points, fkey, designs=polish,
-                                         ftol=tol ** 3)
+                                         ftol=tol ** 3, border=None if ideal else polish_border,
+                                         existence=None if ideal else polish_exists,
+                                         d_existence=None if ideal else d_existence)
         else:
             res = minimize(f, u0, jac=lambda u: -derivative(u).objective / ref, method="SLSQP",
                            constraints=[{"type": "ineq", "fun": g,

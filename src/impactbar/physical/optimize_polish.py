@@ -8,10 +8,15 @@ over the problem's curvature, often above :data:`~impactbar.physical.optimality.
 variables (:func:`~impactbar.physical.optimize_problem._refined_gradient`, four flights a variable and step):
 SLSQP's quadratic subproblem identifies the active constraints and bounds and steps onto them, its
 quasi-Newton Hessian along them, so that a few iterations take the projected gradient from the
-search's resolution to the gradients' accuracy. Its designs are evaluated as the search's are; the
-design it returns is the best feasible design it visited, and only where it is better than the start
-(a design without an orbit, or one that misses a constraint, is never returned), so a polish that
-fails, as at a border of the operating point where its line search backtracks, leaves the start.
+search's resolution to the gradients' accuracy. Its designs are evaluated as the search's are, and
+a design without an orbit is scored as the search scores it, by the border model
+(:mod:`~impactbar.physical.optimize_border`: its nearest success's first-order extrapolation, with
+that model's gradients, and the constraint "the one-impact orbit exists" with its gradient), not by
+a penalty (objective 1, every constraint -1, and no gradient), which SLSQP's quadratic model cannot
+follow back across the border. The design it returns is the best feasible design it visited, and
+only where it is better than the start (a design without an orbit, or one that misses a constraint,
+is never returned), so a polish that fails, as at a border of the operating point where its line
+search backtracks, leaves the start.
 :func:`~impactbar.physical.optimize_drifter` then reports it only where a fresh orbit confirms it
 feasible and no worse than the search's best (its ranking of the designs evaluated).
 """
@@ -30,7 +35,7 @@ class _Spent(Exception):
 
 
 def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-10,
-           feasibility: float = 1e-8):
+           feasibility: float = 1e-8, border=None, existence=None, d_existence=None):
     r"""SLSQP from the design ``u``, the objective maximised under the margins, with given gradients;
     the best feasible design it visits if better than ``u``.
 
@@ -41,7 +46,8 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
     margins : callable
         ``u -> array of shape (m,)``, the constraints' scaled margins (met where :math:`\ge 0`).
     gradients : callable
-        ``u -> (objective_gradient (n,), margin_gradients (m, n))`` in the scaled variables.
+        ``u -> (objective_gradient (n,), margin_gradients (m, n))`` in the scaled variables (at a
+        design without an orbit, those of ``border``'s model where it scores one).
     u : array_like, shape (n,)
         The start, in ``[0, 1]``: the search's best feasible design.
     designs : int
@@ -50,6 +56,16 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
         SLSQP's tolerance on the objective scaled by the start's (positive).
     feasibility : float
         How far (scaled) a margin may miss and still count as met (not negative).
+    border : callable, optional
+        ``u -> (objective, margins (m,))`` or ``None``: a design without an orbit (``objective``
+        ``None``) scored by the search's border model (:mod:`~impactbar.physical.optimize_border`);
+        SLSQP sees those scores there. ``None`` (or a design it does not score): the penalty,
+        objective 1 in SLSQP's scaled terms and every margin -1.
+    existence, d_existence : callable, optional
+        ``u -> float`` and ``u -> array of shape (n,)``: the constraint "the one-impact orbit exists"
+        and its gradient (:func:`~impactbar.physical.optimize_border.existence_gradient`), given to
+        SLSQP after the margins (met where :math:`\ge 0`; not counted in the returned design's
+        feasibility, as it is met at every design with an orbit); both or neither.
 
     Returns
     -------
@@ -83,6 +99,8 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
     f0 = objective(u)
     if f0 is None:
         raise ValueError("u: the start has no value (no orbit); the polish starts from a feasible design")
+    if (existence is None) != (d_existence is None):
+        raise ValueError("existence and d_existence: give both (the constraint and its gradient) or neither")
     ref = abs(f0) or 1.0
     best = {"x": u, "fun": f0, "improved": False}
     seen = {u.tobytes()}
@@ -99,13 +117,28 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
             best.update(x=v, fun=value, improved=True)
         return v, value
 
+    def modelled(v):
+        """A design without an orbit: the border model's objective and margins, else the penalty's
+        (objective ``-ref``: 1 as SLSQP sees it, every margin -1)."""
+        scores = None if border is None else border(v)
+        if scores is None:
+            return -ref, -np.ones(m)
+        value, by_model = scores
+        return value, np.asarray(by_model, dtype=float)
+
     def f(v):
         v, value = visit(v)
-        return 1.0 if value is None else -value / ref
+        if value is None:
+            value, _ = modelled(v)
+        return -value / ref
 
     def g(v):
         v, value = visit(v)
-        return np.asarray(margins(v), dtype=float) if value is not None else -np.ones(m)
+        if value is None:
+            _, out = modelled(v)
+        else:
+            out = np.asarray(margins(v), dtype=float)
+        return out if existence is None else np.append(out, existence(v))
 
     def df(v):  # the objective's gradient, scaled as f
         point, _ = visit(v)
@@ -115,7 +148,7 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
     def dg(v):
         point, _ = visit(v)
         _, d_margins = gradients(point)
-        return d_margins
+        return d_margins if existence is None else np.vstack([d_margins, d_existence(point)])
 
     try:
         # SLSQP's arithmetic on one BLAS thread: its iterates' last bits depend on OpenBLAS's threads
@@ -133,7 +166,7 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
 
 
 def polish_search(evaluate, margins, gradients, history: list, points: dict, fkey: str, *, designs: int,
-                  ftol: float):
+                  ftol: float, border=None, existence=None, d_existence=None):
     """:func:`polish` from the best feasible design of a search
     (:func:`~impactbar.physical.optimize_drifter`'s).
 
@@ -153,6 +186,8 @@ def polish_search(evaluate, margins, gradients, history: list, points: dict, fke
         The polish's most designs.
     ftol : float
         SLSQP's tolerance (:func:`polish`).
+    border, existence, d_existence : callable, optional
+        The search's border model and existence constraint (:func:`polish`'s).
 
     Returns
     -------
@@ -165,7 +200,8 @@ def polish_search(evaluate, margins, gradients, history: list, points: dict, fke
         rec = evaluate(v)
         return rec["objectives"][fkey] if rec["ok"] else None
 
-    res = polish(objective, margins, gradients, points[top["id"]], designs=designs, ftol=ftol)
+    res = polish(objective, margins, gradients, points[top["id"]], designs=designs, ftol=ftol, border=border,
+                 existence=existence, d_existence=d_existence)
     gain = f"{fkey} {top['objectives'][fkey]:.6g} -> {res.fun:.6g}" if res.improved else "no better design"
     res.summary = (f"polished from the best design (SLSQP, the implicit function theorem's gradients): "
                    f"{res.nfev} designs, {gain} ({res.message})")
