@@ -63,20 +63,22 @@ CONSTRAINTS = {"peak_rod_stress": "250 MPa", "min_drilling_rate": "2.5 m/min"}
 def _phases():
     """The wall seconds of the multistart's phases: the sample's designs computed together
     (``compute_new``, on the workers) and the polish (``polish_search``); the local searches and the
-    rest (the fresh re-evaluation, the certificate) are the call's wall time less those."""
+    rest (the fresh re-evaluation, the certificate) are the call's wall time less those. Under
+    ``"<phase> CPU"`` the CPU seconds this process spent in each (the workers' not counted)."""
     import impactbar.physical.optimize_multistart as multistart
 
     module = inspect.getmodule(optimize_drifter)
-    walls = {"sample": 0.0, "polish": 0.0}
+    walls = {"sample": 0.0, "polish": 0.0, "sample CPU": 0.0, "polish CPU": 0.0}
     saved = [(multistart, "compute_new", "sample"), (module, "polish_search", "polish")]
 
     def timed(fn, phase):
         def wrapper(*args, **kwargs):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             try:
                 return fn(*args, **kwargs)
             finally:
                 walls[phase] += time.perf_counter() - t0
+                walls[f"{phase} CPU"] += time.process_time() - c0
         return wrapper
 
     kept = [(m, n, phase, getattr(m, n)) for m, n, phase in saved if hasattr(m, n)]
@@ -143,8 +145,9 @@ def _timed_designs():
             setattr(module, name, fn)
 
 
-def summary(res, wall: float, cpu: float, calls: dict) -> dict:
-    """The figures ``--against`` compares: designs, failures and their cost, certificate, gain."""
+def summary(res, wall: float, cpu: float, calls: dict, walls: dict | None = None) -> dict:
+    """The figures ``--against`` compares: designs, failures and their cost, certificate, gain, and
+    with ``walls`` (:func:`_phases`') the multistart's phases' wall and CPU seconds."""
     failed = [r for r in res.history if not r.get("ok")]
     cert = getattr(res, "certificate", None)
     return {"designs evaluated": res.evaluations, "continued from a neighbour": sum(
@@ -154,6 +157,10 @@ def summary(res, wall: float, cpu: float, calls: dict) -> dict:
             "the listed classified CPU s": calls["classified"],
             "their recorded s": sum(r.get("seconds", 0.0) + r.get("motion_seconds", 0.0) for r in failed),
             "all designs CPU s": calls["ok"] + calls["failed"], "wall s": wall, "CPU s": cpu,
+            **({} if walls is None else {"sample wall s": walls["sample"], "polish wall s": walls["polish"],
+                                         "polish CPU s": walls["polish CPU"], "the rest wall s": wall
+                                         - walls["sample"] - walls["polish"], "the rest CPU s": cpu
+                                         - walls["sample CPU"] - walls["polish CPU"]}),
             "certificate": cert.verdict if cert is not None else "none",
             "KKT residual": cert.residual if cert is not None else None,
             "gain %": 100.0 * res.gain, OBJECTIVES[res.objective][0]: res.optimum["objectives"][
@@ -227,7 +234,7 @@ def main(argv=None) -> None:
     cpu = time.process_time() - c0
     wall = time.perf_counter() - t
     if args.json:
-        print(json.dumps(summary(res, wall, cpu, calls)))
+        print(json.dumps(summary(res, wall, cpu, calls, walls if args.method == "multistart" else None)))
         return
     print(res.table())
     print(f"one baseline evaluation (fresh orbit): {one:.1f} s; optimize_drifter ({args.method}, "
@@ -245,7 +252,9 @@ def main(argv=None) -> None:
         _multistart_summary(res)
         print(f"wall time by phase ({args.workers or 'no'} workers): the sample {walls['sample']:.0f} s, the "
               f"polish {walls['polish']:.0f} s, the local searches and the rest "
-              f"{wall - walls['sample'] - walls['polish']:.0f} s")
+              f"{wall - walls['sample'] - walls['polish']:.0f} s; CPU time of this process: the polish "
+              f"{walls['polish CPU']:.0f} s, the local searches and the rest "
+              f"{cpu - walls['sample CPU'] - walls['polish CPU']:.0f} s")
     if args.out:
         res.to_json(args.out)
 

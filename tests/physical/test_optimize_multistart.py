@@ -113,4 +113,49 @@ def test_cli_multistart(tmp_path, capsys):
 def test_a_local_cluster_gives_the_same_search_bit_for_bit(run):
     par = optimize_drifter("circuit-drifter", VARY, workers=2, **KW)
     assert [_record(r) for r in par.history] == [_record(r) for r in run.history]
-    assert par.optimum["values"] == run.optimum["values"]
+    assert par.optimum["values"] == run.optimum["values"] and par.found == run.found
+
+
+def test_a_local_cluster_gives_the_same_polish_bit_for_bit():
+    """A local search of four designs, so that the polish steps (three designs, a gradient each):
+    its gradients' columns on the two workers, the same gradients as in this process, so the same
+    designs, polish and certificate, to the bit."""
+    kw = dict(KW, max_evaluations=12)
+    one, par = (optimize_drifter("circuit-drifter", VARY, workers=workers, **kw) for workers in (None, 2))
+    assert [_record(r) for r in par.history] == [_record(r) for r in one.history]
+    assert one.gradients >= 2 and par.gradients == one.gradients
+    assert "impact_power_kW 13.23" in one.message and par.message == one.message  # (it improved)
+    assert par.optimum["values"] == one.optimum["values"] and par.found == one.found
+    cert, again = one.certificate, par.certificate
+    assert (again.verdict, again.residual, again.active) == (cert.verdict, cert.residual, cert.active)
+    np.testing.assert_array_equal(again.objective_gradient, cert.objective_gradient)
+
+
+def test_the_refined_gradients_columns_on_workers_are_the_serial_ones():
+    """:func:`_refined_gradient` with its steps' columns mapped (two a round; here by a map that
+    records its calls) gives the serial ladder's gradient, to the bit, and asks for the first two
+    steps together."""
+    from impactbar.physical.design_keys import design_bounds
+    from impactbar.physical.loader import config_value
+    from impactbar.physical.optimize_problem import _limits, _refined_gradient, evaluate_design, objectives
+
+    cfg, folder = read_config("circuit-drifter")
+    base = build(cfg, folder)
+    limits = _limits({}, base, ideal=False)
+    spec = design_bounds(cfg, VARY, folder)
+    span = np.array([spec[k]["high"] - spec[k]["low"] for k in spec])
+    rec, orbit = evaluate_design(base, limits)
+    rec.update(values={k: spec[k]["start"] for k in spec}, changes={k: config_value(cfg, k) for k in spec})
+    fkey = objectives("circuit")["impact_power"].key
+    rounds = []
+
+    def run(fn, items, **common):
+        rounds.append([step for step, _ in items])
+        return [fn(item, **common) for item in items]
+
+    serial = _refined_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span)
+    mapped = _refined_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span, run=run)
+    np.testing.assert_array_equal(mapped.objective, serial.objective)
+    np.testing.assert_array_equal(mapped.constraints, serial.constraints)
+    assert np.any(serial.objective != 0.0)
+    assert len(rounds[0]) == 2 * len(spec) and len(set(rounds[0])) == 2

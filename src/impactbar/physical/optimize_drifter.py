@@ -47,6 +47,8 @@ their public names imported here as well.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import hashlib
 import json
 import math
@@ -69,7 +71,7 @@ from .optimize_integers import integer_search
 from .optimize_multistart import check_multistart, multistart_search
 from .optimize_outputs import constraint_output, piston_and_multipliers, shank_stress
 from .optimize_polish import polish_search
-from .optimize_population import check_population, penalised, population_search
+from .optimize_population import _is_client, check_population, penalised, population_search, record_map
 from .optimize_problem import (
     DEFAULT_CONSTRAINTS,
     FEASIBILITY_TOLERANCE,
@@ -194,7 +196,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     workers : None, int or distributed.Client
         Where a population's or a sample's designs are evaluated (those two methods only):
         ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
-        (started and closed by the call), or a client's cluster; the same records either way.
+        (started and closed by the call), or a client's cluster; the same records either way. The
+        multistart's polish computes its gradients' columns there too (two steps of
+        :func:`~impactbar.physical.optimize_problem._refined_gradient` a round) on more than one
+        worker or a client's cluster: the same gradients as in this process, to the bit.
     popsize, seed : int
         The population per variable (at least 2) and the random seed (at least 0) of
         ``method="differential_evolution"`` (``"multistart"``: the sample's seed).
@@ -414,6 +419,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     bar = DesignProgress(None if method == "slsqp" else max_evaluations, progress)
     start = np.array([spec[k]["start"] for k in keys])
     u0 = (start - lo) / span
+    cluster = contextlib.ExitStack()  # (the multistart's workers, open through its polish)
+    spread = None  # the multistart's map on its workers: the polish's gradients' columns computed there
     try:
         first = check_start(evaluate(u0), any_start)
         ref = abs(first["objectives"][fkey]) or 1.0
@@ -499,7 +506,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             rec = evaluate(u)
             if not rec["ok"] and border(rec, which) is not None:
                 u, which = points[rec["border"]["nearest"]], rec["border"].get("gradient", "default")
-            return gradient_of(u, which, _design_gradient if which == "default" else _refined_gradient)
+            return gradient_of(u, which, _design_gradient if which == "default" else
+                              functools.partial(_refined_gradient, run=spread))  # (on the workers: spread)
 
         def derivative(u):  # (SLSQP's and the border model's)
             return model_gradient(u)
@@ -543,10 +551,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 return minimize(f, u, method="COBYLA", constraints=[{"type": "ineq", "fun": g}] + (
                     [] if ideal else [{"type": "ineq", "fun": exists}]), bounds=[(0.0, 1.0)] * len(keys),
                     options={"rhobeg": rhobeg, "tol": tol, "maxiter": most})
+            if method == "multistart":
+                run = cluster.enter_context(record_map(workers))
+                # (one worker, or this process: each step where the one before asks for it)
+                spread = run if _is_client(workers) or workers is not None and workers > 1 else None
             res, found = (cobyla(u0), []) if method == "cobyla" else multistart_search(
                 evaluate, id_and_changes, store, _design_record,
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
-                sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
+                sample=sample, local_starts=local_starts, seed=seed, run=run, n_variables=len(keys))
             if found and polish:
                 polished = polish_search(evaluate, g, refined, history, points, fkey, designs=polish,
                                          ftol=tol ** 3, border=None if ideal else polish_border,
@@ -562,6 +574,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         bar.finish()
     finally:
         bar.close()
+        cluster.close()
     # what the drill does at the designs without a one-impact orbit that the result lists (the search
     # classified none: the motion from rest costs several evaluations)
     if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)) and cache_path:

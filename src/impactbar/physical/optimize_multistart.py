@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .optimize_population import _is_client, compute_new, record_map
+from .optimize_population import _is_client, compute_new
 
 __all__ = ["check_multistart", "found_table", "multistart_search", "sobol_sample"]
 
@@ -110,7 +110,7 @@ def sobol_sample(n_variables: int, sample: int, seed: int) -> np.ndarray:
 
 
 def multistart_search(evaluate, design_of, stored, record, common: dict, local, fkey: str, *, sample: int,
-                      local_starts: int, seed: int, workers, n_variables: int) -> tuple:
+                      local_starts: int, seed: int, run, n_variables: int) -> tuple:
     """A Sobol sample of the scaled variables computed together, then ``local`` from its best feasible
     designs.
 
@@ -133,8 +133,10 @@ def multistart_search(evaluate, design_of, stored, record, common: dict, local, 
         The objective's figure in a record's ``objectives`` (maximised).
     sample, local_starts, seed : int
         The sample's designs (a power of two), the local searches, the sample's seed.
-    workers : None, int or distributed.Client
-        Where the sample's records are computed.
+    run : callable
+        ``run(record, items, **common)``: the sample's records, computed together
+        (:func:`~impactbar.physical.optimize_population.record_map`'s map, in this process or on a
+        cluster's workers).
     n_variables : int
         The variables' number.
 
@@ -150,8 +152,7 @@ def multistart_search(evaluate, design_of, stored, record, common: dict, local, 
     from scipy.optimize import OptimizeResult
 
     points = sobol_sample(n_variables, sample, seed)
-    with record_map(workers) as run:
-        compute_new(run, points, design_of, stored, evaluate, record, common)
+    compute_new(run, points, design_of, stored, evaluate, record, common)
     recs = [evaluate(u) for u in points]
     ranked = sorted((i for i, r in enumerate(recs) if r.get("feasible")),
                     key=lambda i: recs[i]["objectives"][fkey], reverse=True)[:local_starts]

@@ -162,7 +162,10 @@ def _client_map(client):
         items = list(items)
         if not items:
             return []
-        return client.gather(client.map(fn, items, pure=False, **common))
+        # the shared arguments sent to each worker once, not with each task (an orbit is megabytes)
+        shared = dict(zip(common, client.scatter(list(common.values()), broadcast=True, hash=False),
+                          strict=True)) if common else {}
+        return client.gather(client.map(fn, items, pure=False, **shared))
 
     return run
 

@@ -383,66 +383,104 @@ def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
     return rec
 
 
-def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
-                     span: np.ndarray, step: float | None = None) -> _Gradients:
-    """The gradients of a design's objective and of its constraints' scaled margins in the scaled
-    variables: per variable by :func:`~impactbar.physical.sensitivity.tangent_derivatives` from the
-    design's orbit, or where its step meets a border (or a design read from the cache, without its
-    orbit) by central differences of orbits continued from the design's; zeros for a design
-    without an orbit. ``step``: the differences' relative step (``None``: :func:`default_step`'s)."""
+def _gradient_column(j: int, cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
+                     span: np.ndarray, step: float):
+    """Column ``j`` of :func:`_design_gradient` (a module-level function: a worker's task): the
+    objective's derivative and the margins' in the scaled variable ``j``, or ``None`` where neither
+    the linearised orbit nor the secant of two continued orbits gives one (the column left zero)."""
     keys, names = list(spec), list(limits)
-    dobj, dcon = np.zeros(len(keys)), np.zeros((len(names), len(keys)))
-    if not rec["ok"]:
-        return _Gradients(dobj, dcon)
     design = with_values(cfg, rec["changes"])
     values, units = rec["values"], {k: spec[k]["unit"] for k in keys}
+    key = keys[j]
 
     def read(point) -> dict:
         r = _figures(point, limits)
         return {"objective": r["objectives"][fkey], **{n: r["constraints"][n]["scaled"] for n in names}}
 
-    if orbit is None:
-        orbit = build(design, folder).orbit()
-    step = default_step(orbit.drifter) if step is None else step
-    for j, key in enumerate(keys):
+    try:
+        _, _, derivatives = tangent_derivatives(design, folder, orbit, [key], values, units, step,
+                                                "max_multiplier" in limits, read)
+        col = {n: d[key] for n, d in derivatives.items()}
+    except ValueError:  # a border within the step: the secant of two continued orbits
+        h = step * abs(values[key])
         try:
-            _, _, derivatives = tangent_derivatives(design, folder, orbit, [key], values, units, step,
-                                                    "max_multiplier" in limits, read)
-            col = {n: d[key] for n, d in derivatives.items()}
-        except ValueError:  # a border within the step: the secant of two continued orbits
-            h = step * abs(values[key])
-            try:
-                above, below = [read(build(with_values(design, {key: config_quantity(values[key] + s * h,
-                                                                                     units[key])}),
-                                           folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
-            except (ValueError, np.linalg.LinAlgError, ArithmeticError):
-                continue
-            col = {n: (above[n] - below[n]) / (2.0 * h) for n in above}
-        dobj[j] = col["objective"] * span[j]
-        dcon[:, j] = [col[n] * span[j] for n in names]
+            above, below = [read(build(with_values(design, {key: config_quantity(values[key] + s * h,
+                                                                                 units[key])}),
+                                       folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
+        except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+            return None
+        col = {n: (above[n] - below[n]) / (2.0 * h) for n in above}
+    return col["objective"] * span[j], [col[n] * span[j] for n in names]
+
+
+def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
+                     span: np.ndarray, step: float | None = None, columns=None) -> _Gradients:
+    """The gradients of a design's objective and of its constraints' scaled margins in the scaled
+    variables: per variable by :func:`~impactbar.physical.sensitivity.tangent_derivatives` from the
+    design's orbit, or where its step meets a border (or a design read from the cache, without its
+    orbit) by central differences of orbits continued from the design's; zeros for a design
+    without an orbit. ``step``: the differences' relative step (``None``: :func:`default_step`'s);
+    ``columns``: the columns already computed (:func:`_gradient_column`'s, by variable), else
+    computed here one after another."""
+    dobj, dcon = np.zeros(len(spec)), np.zeros((len(limits), len(spec)))
+    if not rec["ok"]:
+        return _Gradients(dobj, dcon)
+    if orbit is None:
+        orbit = build(with_values(cfg, rec["changes"]), folder).orbit()
+    step = default_step(orbit.drifter) if step is None else step
+    for j in range(len(spec)):
+        col = (columns[j] if columns is not None else
+               _gradient_column(j, cfg, folder, rec, orbit, spec, limits, fkey, span, step))
+        if col is not None:
+            dobj[j], dcon[:, j] = col
     return _Gradients(dobj, dcon)
 
 
+#: The refined gradient's steps: the default one, then each a tenth of the one before.
+REFINEMENTS = 3
+
+
 def _refined_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
-                      span: np.ndarray, rtol: float = 1e-2) -> _Gradients:
+                      span: np.ndarray, rtol: float = 1e-2, run=None) -> _Gradients:
     """:func:`_design_gradient` at the default step where it agrees with a step ten times smaller (the
     objective's and the margins' gradients together, to ``rtol`` of their norm), else at the smaller
     step where that agrees with the next (down to a thousandth of the default): near a border of the
     operating point (a design without an orbit within the default step, as at the whole drifter's best
     designs) the differences of the linearised orbit straddle it and are wrong (by up to a factor 50
     on the example rock drifter's), while those of a smaller step agree with central differences of
-    fresh orbits."""
+    fresh orbits. ``run``: a map (:func:`~impactbar.physical.optimize_population.record_map`'s, on a
+    cluster's workers) that computes the columns of two steps together (the default and the next,
+    then the last two where asked), the same numbers as one after another (each column the same
+    function of the same orbit), compared here alike; ``None``: one step after another in this
+    process, each where the one before asks for it."""
     if rec["ok"] and orbit is None:
         orbit = build(with_values(cfg, rec["changes"]), folder).orbit()
     step = default_step(orbit.drifter) if rec["ok"] else 0.0
-    prev = _design_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span, step)
-    for _ in range(3):
-        if not rec["ok"]:
-            break
+    steps = []
+    for _ in range(1 + (REFINEMENTS if rec["ok"] else 0)):  # (each a tenth of the one before, as divided)
+        steps.append(step)
         step /= 10.0
-        cur = _design_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span, step)
+    n, done = len(spec), {}
+
+    def level(i):
+        if run is not None and rec["ok"] and i not in done:  # (two steps a round: the first two always
+            pair = [i, i + 1][:len(steps) - i]  # asked, the last two mostly, on the example's designs)
+            flat = run(_step_column, [(steps[k], j) for k in pair for j in range(n)], cfg=cfg, folder=folder,
+                       rec=rec, orbit=orbit, spec=spec, limits=limits, fkey=fkey, span=span)
+            done.update({k: flat[m * n:(m + 1) * n] for m, k in enumerate(pair)})
+        return _design_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span, steps[i], done.get(i))
+
+    prev = level(0)
+    for i in range(1, len(steps)):
+        cur = level(i)
         a, b = np.vstack([*prev]), np.vstack([*cur])
         if np.linalg.norm(a - b) <= rtol * max(np.linalg.norm(a), np.linalg.norm(b)):
             break
         prev = cur
     return prev
+
+
+def _step_column(item: tuple, **common):
+    """:func:`_gradient_column` of ``item = (step, j)`` (a worker's task of :func:`_refined_gradient`)."""
+    step, j = item
+    return _gradient_column(j, step=step, **common)
