@@ -71,6 +71,50 @@ class BorderScore(NamedTuple):
     located: str
     radius: float
 
+    def as_record(self) -> dict:
+        """The scores as a failed design's record keeps them (``border``, beside ``nearest``).
+
+        Returns
+        -------
+        dict
+            ``objective``, ``margins`` (a list), the existence constraint under :data:`EXISTENCE`,
+            ``t``, ``located`` and, only where located at the radius, ``radius``: plain JSON data.
+
+        Examples
+        --------
+        >>> s = BorderScore(3.0, np.array([0.4]), -0.6, 0.25, "margin", math.nan)
+        >>> sorted(s.as_record())
+        ['located', 'margins', 'objective', 'one_impact_orbit', 't']
+        >>> r = BorderScore.from_record(s.as_record())
+        >>> r.objective, r.margins.tolist(), r.exists, r.t, r.located, math.isnan(r.radius)
+        (3.0, [0.4], -0.6, 0.25, 'margin', True)
+        """
+        return {"objective": self.objective, "margins": self.margins.tolist(), EXISTENCE: self.exists,
+                "t": self.t, "located": self.located,
+                **({"radius": self.radius} if self.located == "radius" else {})}
+
+    @classmethod
+    def from_record(cls, record: dict) -> BorderScore:
+        """The scores a failed design's record keeps (:meth:`as_record`'s).
+
+        Parameters
+        ----------
+        record : dict
+            The record's ``border``.
+
+        Returns
+        -------
+        BorderScore
+            ``radius`` ``nan`` where the record has none (located by the margin).
+
+        Raises
+        ------
+        KeyError
+            A score missing from ``record``.
+        """
+        return cls(record["objective"], np.asarray(record["margins"], dtype=float), record[EXISTENCE],
+                   record["t"], record["located"], record.get("radius", math.nan))
+
 
 def existence_margin(record: dict, scale: float) -> float:
     """A design's existence margin: its largest Floquet multiplier's modulus to the unit circle over

@@ -445,9 +445,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                               and r["border"]["nearest"] == nid), default=math.inf)
                 s = border_score(u, at, success["objectives"][fkey], [c["scaled"] for c in success[
                     "constraints"].values()], existence_margin(success, scale), *grad, d_exists, radius)
-                rec["border"] = {"nearest": nid, "objective": s.objective, "margins": s.margins.tolist(),
-                                 EXISTENCE: s.exists, "t": s.t, "located": s.located,
-                                 **({"radius": s.radius} if s.located == "radius" else {}),
+                rec["border"] = {"nearest": nid, **s.as_record(),
                                  **({} if which == "default" else {"gradient": which})}
             return rec.get("border")
 
@@ -536,9 +534,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             b = border(rec, "refined")
             success = next(r for r in history if r["id"] == b["nearest"])
             _, d_e = exists_model(points[b["nearest"]], b.get("gradient", "default"))
-            s = BorderScore(b["objective"], np.asarray(b["margins"]), b[EXISTENCE], b["t"], b["located"],
-                            b.get("radius", math.nan))
-            return existence_gradient(points[rec["id"]], points[b["nearest"]], s,
+            return existence_gradient(points[rec["id"]], points[b["nearest"]], BorderScore.from_record(b),
                                       existence_margin(success, scale), d_e)
 
         if method == "differential_evolution":
