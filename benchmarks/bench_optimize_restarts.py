@@ -58,7 +58,9 @@ The multistart again from that run's cache with the polish (12 designs, 3 refine
 KKT residual 0.085, the drilling rate active with multiplier 0.282, the pre-charge at its low bound,
 a design of its last steps without an orbit).
 The twentieth search never reported in three runs: its tenth design (``BUZZING`` in
-tests/physical/drifter_optimum.py) has no orbit, and the classification of its motion after the
+tests/physical/drifter_optimum.py) has no orbit from rest on the stop (``orbit()``'s default chain;
+it has a stable one from rest at the switch point, ``orbit(switch_start=True)``), and the
+classification of its motion after the
 search ran from rest a piston buzzing on the shank (700 impacts a second) for more than 16 minutes.
 With the settle runs bounded by their impacts (``--only 20 --cache``, the multistart read from the
 cache, 1 worker, load about 5): 74 s, 30 designs (2 without an orbit), 0.107945 m/min/kW feasible

@@ -323,10 +323,11 @@ WIDER_NOT_RECORDS = {
     # areas_m2: the first or last segment's; lengths: the first or last segment's; wavenumbers: a mode's
     # wavenumber
     "physical/bar.py": {"areas_m2", "lengths", "wavenumbers"},
-    # drive_states: the first impact's; q: the modal coordinates: [0] the rigid mode;
-    # states_after_impact: the first impact's; v: the modal velocities ([0] the rigid mode) or a series'
-    # last
-    "physical/circuit.py": {"drive_states", "q", "states_after_impact", "v"},
+    # drive_states: the first impact's; q: the modal coordinates: [0] the rigid mode; v: the modal
+    # velocities ([0] the rigid mode) or a series' last
+    "physical/circuit.py": {"drive_states", "q", "v"},
+    # drive_states, impact_times, states_after_impact: the first impact's; due: the last impact due
+    "physical/circuit_switch.py": {"drive_states", "due", "impact_times", "states_after_impact"},
     "physical/drifter.py": {"t[]"},  # t[]: the selected times' ends
     # f: a series' first and last values; r: a CSV row's first cell; rows[]: the first row's first cell;
     # t: a time grid's first and last; times_s: the first time
@@ -433,7 +434,7 @@ STRING_NOT_RECORDS = {
     "measure/spec.py": {"given", "sorted()"},  # the first name
     "model.py": {"bad"},  # the first bad name
     "paper.py": {"d5[]", "d8[]"},  # a column's first value
-    "physical/circuit.py": {"rest"},  # the first rest
+    "physical/circuit_switch.py": {"rest"},  # the first rest
     "physical/circuit_branch.py": {"v"},  # the first and last value
     "physical/circuit_parts.py": {"bad", "unknown"},  # the first name
     "physical/config.py": {"extra", "unknown"},  # the first name

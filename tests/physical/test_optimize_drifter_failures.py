@@ -5,6 +5,7 @@ documented search met with the blows ended at the law's fixed window, and are bu
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 from drifter_optimum import BUZZING, EXAMPLE, SEARCHED, collar, window_end
 
+import impactbar
 from impactbar.orbits import coupled
 from impactbar.physical import CircuitDrifter, build, read_config, settle, with_values
 from impactbar.physical.optimize_cache import dumps
@@ -38,9 +40,9 @@ def _page() -> str:
     return re.sub(r"\s+", " ", (EXAMPLE.parents[1] / "docs" / "optimising_a_drifter.md").read_text())
 
 
-def _blows(monkeypatch, changes: dict):
-    """The coupled blows an ``orbit()`` of the design solves (each some 20 ms, most of an orbit's
-    cost), and its orbit or error."""
+def _blows(monkeypatch, changes: dict, **options):
+    """The coupled blows an ``orbit(**options)`` of the design solves (each some 20 ms, most of an
+    orbit's cost), and its orbit or error."""
     count, solve = [0], coupled.blow_state
 
     def counted(*args, **kwargs):
@@ -51,7 +53,7 @@ def _blows(monkeypatch, changes: dict):
     with monkeypatch.context() as m:
         m.setattr(coupled, "blow_state", counted)
         try:
-            out = build(with_values(cfg, changes), folder).orbit()
+            out = build(with_values(cfg, changes), folder).orbit(**options)
         except ValueError as exc:
             out = exc
     return count[0], out
@@ -148,8 +150,11 @@ def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_
     history = [{"ok": True, "seconds": 0.3}, dict(rec, values={"piston.collar_diameter": diameter})]
     table = failures_table(history, vary).splitlines()
     assert table[0].startswith("1 of 2 designs without an operating point (")
+    # nor from rest at the switch point (Newton stalls there too, in some 30 blows)
+    assert rec["switch_summary"].startswith("from rest at the switch point: no one-impact orbit either "
+                                            "(find_orbit: Newton stalled")
     assert table[1] == ("  piston.collar_diameter 47.691 mm: find_orbit found no periodic orbit of the drive "
-                        f"with one impact per period; {rec['motion_summary']}")
+                        f"with one impact per period; {rec['motion_summary']}; {rec['switch_summary']}")
 
 
 def test_the_searched_design_s_record_says_the_two_blow_cycle_that_simulate_from_rest_shows():
@@ -161,6 +166,9 @@ def test_the_searched_design_s_record_says_the_two_blow_cycle_that_simulate_from
     rec = _design_record(SEARCHED, cfg, folder, dict(DEFAULT_CONSTRAINTS, mean_supply_pressure=None))
     motion = classify_failed(rec, build(with_values(cfg, SEARCHED), folder))["motion"]
     assert "no periodic orbit" in rec["error"] and motion["period_blows"] == 2
+    # (nor from rest at the switch point: Newton stalls there too)
+    assert rec["switch_summary"].startswith("from rest at the switch point: no one-impact orbit either "
+                                            "(find_orbit: Newton stalled")
     assert motion["chatter_per_blow"] == 0.0 and motion["n_blows"] == 160
     assert rec["motion_summary"].startswith("settles into a period-2 motion (2 blows per cycle, 0.081 % "
                                             "spread), no chatter")
@@ -176,11 +184,14 @@ def test_the_searched_design_s_record_says_the_two_blow_cycle_that_simulate_from
 
 
 def test_a_design_whose_piston_buzzes_on_the_shank_is_classified_in_a_bounded_number_of_impacts(monkeypatch):
-    """A design the restarts' benchmark met (BUZZING: a front annulus of 0.39 mm^2): no one-impact orbit;
-    from rest two blows, then the piston buzzes on the shank, every impact a coupled contact with the
-    rock. Its classification runs once, to its impacts' bound (4 a blow wanted: 160), and says it
-    stalls, where it ran from rest 1 s, then 16 s (some 11,000 impacts), then more: over 16 minutes.
-    Checked against a run of simulate from rest of the same length, without the bound."""
+    """A design the restarts' benchmark met (BUZZING: a front annulus of 0.39 mm^2): no one-impact orbit
+    from the default chain's start, rest on the stop; from rest two blows, then the piston buzzes on
+    the shank, every impact a coupled contact with the rock. Its classification runs once, to its
+    impacts' bound (4 a blow wanted: 160), and says it stalls, where it ran from rest 1 s, then 16 s
+    (some 11,000 impacts), then more: over 16 minutes. Checked against a run of simulate from rest of
+    the same length, without the bound. The drill has a one-impact orbit all the same, stable, that
+    rest does not reach: the record says so (from rest at the switch point), checked against a run of
+    simulate from there."""
     cfg, folder = read_config(EXAMPLE)
     rec = _design_record(BUZZING, cfg, folder, dict(DEFAULT_CONSTRAINTS, mean_supply_pressure=None))
     assert rec["ok"] is False and "no periodic orbit" in rec["error"]
@@ -213,6 +224,48 @@ def test_a_design_whose_piston_buzzes_on_the_shank_is_classified_in_a_bounded_nu
     assert np.all(v[:2] >= 0.25 * v[0]) and np.all(v[2:] < 0.25 * v[0])
     late, gaps = v[-100:], np.diff(t[-101:])
     assert np.all(late < 0.01 * v[0]) and np.ptp(gaps) <= 0.01 * gaps.mean() and gaps.mean() < 2e-3
+    # and what exists: a one-impact orbit the buzz never reaches, found from rest at the switch point
+    # (checked there by a restart), stable, the relief valve opening during its period
+    found = rec["switch_orbit"]
+    assert found["stable"] and found["max_multiplier"] == pytest.approx(0.575, abs=1e-3)
+    assert found["border_margins_Pa"]["relief"] < -0.5e6 and not found["cavitates"]
+    assert rec["switch_summary"] == ("from rest at the switch point: a stable one-impact orbit (|mu| 0.575), "
+                                     "50.3 Hz, 8.92 m/s, relief open")
+    assert rec["switch_summary"] in _page()  # (quoted there)
+    # simulate from rest at the switch point, the supply at the relief's setting (no Newton): its blows
+    # go to the orbit's (to 1e-8 by the 30th, 40 blows), each blow's distance from the orbit 0.575 of
+    # the one before (the largest multiplier: no other left, from the 8th to the 14th)
+    drifter = build(with_values(cfg, BUZZING), folder)
+    drive = drifter.drive()
+    p_rel, tank = drive.supply.relief_pressure, drive.supply.tank_pressure
+    charged = dataclasses.replace(drive, start_pressures=(p_rel, tank, p_rel, 1.0))
+    start = impactbar.InitialState.rigid(-drive.valve.switch_out, 0.0, drifter.n_modes)
+    run = impactbar.simulate(drifter.model(), charged, start, 0.8 * drifter.omega_rad_s, histories=False)
+    t, v = np.asarray(run.impact_times) / drifter.omega_rad_s, np.asarray(run.impact_velocities)
+    v = v * drifter.bar.length_m * drifter.omega_rad_s
+    assert t.size == 40 and np.all(v > 0.25 * v.max())  # blows, no buzz
+    assert np.allclose(np.diff(t[30:]), found["period_s"], rtol=1e-8, atol=0.0)
+    assert np.allclose(v[30:], found["impact_velocity_m_s"], rtol=1e-8, atol=0.0)
+    off = v[7:15] - found["impact_velocity_m_s"]
+    assert np.allclose(off[1:] / off[:-1], found["max_multiplier"], rtol=1e-2, atol=0.0)
+
+
+def test_orbit_finds_from_the_switch_point_what_its_default_chain_misses(monkeypatch):
+    """``orbit(switch_start=True)``: where the default chain (rest on the stop) finds no orbit, the
+    start from rest at the switch point; on BUZZING the classification's orbit, in some 30 coupled
+    blows (an orbit's cost: 35 on ``collar(1.003)``); where it finds none either (``collar(1.01)``,
+    Newton stalls from both) the error says both. The option is off by default: the default chain's
+    error, unchanged."""
+    n_plain, err = _blows(monkeypatch, BUZZING)
+    assert isinstance(err, ValueError) and "no periodic orbit" in str(err) and "switch point" not in str(err)
+    n_both, point = _blows(monkeypatch, BUZZING, switch_start=True)
+    assert 20 <= n_both - n_plain <= 40, (n_both, n_plain)
+    assert point.stable and abs(np.abs(point.orbit.multipliers).max() - 0.575) < 1e-3
+    assert point.border_margins_Pa["relief"] < 0.0  # the relief valve opens during the period
+    cfg, folder = read_config(EXAMPLE)
+    with pytest.raises(ValueError, match=r"no periodic orbit.*; from rest at the valve's switch point: "
+                                         r"find_orbit: Newton stalled"):
+        build(with_values(cfg, collar(1.01)), folder).orbit(switch_start=True)
 
 
 _NO_ORBIT = "find_orbit found no periodic orbit of the drive with one impact per period; tried"

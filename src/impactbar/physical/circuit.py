@@ -43,7 +43,6 @@ Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coeff
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -54,6 +53,8 @@ from . import tree
 from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar
 from .circuit_parts import part_field, part_kinds, read_parts, unused_valve, valve_stand_in
+from .circuit_switch import check_repeats as _check_repeats
+from .circuit_switch import switch_start_orbit
 from .drifter import (
     DrifterOrbit,
     _config_sections,
@@ -284,7 +285,8 @@ class CircuitDrifter(_ScaledDrifter):
             extra_parts=tuple(p.build(self) for p in self.parts))
 
     # -- results -----------------------------------------------------------------------------------
-    def orbit(self, guess=None, *, allow_cavitation: bool = False) -> CircuitDrifterOrbit:
+    def orbit(self, guess=None, *, allow_cavitation: bool = False,
+              switch_start: bool = False) -> CircuitDrifterOrbit:
         """The one-impact periodic motion, its operating point in SI (:func:`impactbar.find_orbit`
         with the circuit: from rest on the stop, the motion followed until it settles, then Newton
         with the variational equations' Jacobian).
@@ -297,6 +299,15 @@ class CircuitDrifter(_ScaledDrifter):
             unknowns (the state after the impact, the pressures, the flights' times) are taken as
             they are, in the model's units, and its flights' modes adopted (as a continuation step
             does); without one, the default chain below.
+        allow_cavitation : bool
+            Return a cavitating orbit (below) rather than refuse it.
+        switch_start : bool
+            Where the default chain finds no orbit, start again from the piston at rest at the
+            valve's switch point (:func:`~impactbar.physical.circuit_switch.switch_start_orbit`:
+            an orbit whose basin does not hold the rest on the stop, e.g. where the piston from
+            rest buzzes on the shank), the orbit found checked by a restart from its arrival, stable
+            or not (its ``stable`` says). Default ``False``: the default chain alone, as the design
+            maps and the optimiser find their orbits.
 
         Raises
         ------
@@ -305,7 +316,8 @@ class CircuitDrifter(_ScaledDrifter):
             cannot move the piston), or only onto the piston resting on the stop (its bounces dying
             away: no orbit with a blow), or a chamber empties; or where the orbit found does not
             repeat when :func:`impactbar.simulate` restarts it (checked over two periods to
-            ``REPEAT_TOL``, without a drill string), or where an absolute pressure of the orbit
+            :data:`~impactbar.physical.circuit_switch.REPEAT_TOL`, without a drill string; with
+            ``switch_start`` that start's orbit, rock or not), or where an absolute pressure of the orbit
             falls below 0 (the oil would cavitate: :attr:`CircuitDrifterOrbit.cavitates`), unless
             ``allow_cavitation`` (then the orbit is returned with ``cavitates`` set: a design map
             draws the region).
@@ -313,9 +325,19 @@ class CircuitDrifter(_ScaledDrifter):
         from ..orbits import find_orbit
 
         g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
-        orbit = find_orbit(self.model(), self.drive(), guess=g)  # (another design's: its unknowns)
-        if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
-            _check_repeats(orbit)
+        model, drive = self.model(), self.drive()
+        try:
+            orbit = find_orbit(model, drive, guess=g)  # (another design's: its unknowns)
+        except ValueError as err:
+            if not (switch_start and g is None and "no periodic orbit" in str(err)):
+                raise
+            try:  # (checked by a restart from its arrival there, rock or not)
+                orbit = switch_start_orbit(self, model, drive)
+            except ValueError as again:
+                raise ValueError(f"{err}; from rest at the valve's switch point: {again}") from None
+        else:
+            if self.drill is None:  # (the default chain's: a blow with the rock not restarted here)
+                _check_repeats(orbit)
         point = CircuitDrifterOrbit(self, orbit)
         if not allow_cavitation:
             _refuse_cavitation(point.minimum_pressures_Pa,
@@ -419,47 +441,6 @@ def _read_field(f, section: dict):
         raise ValueError(f"{f.key} must be {what or 'a number'}, e.g. {f.example}; got None (leave an "
                          "optional key out)")
     return to_si(f.key, value, f.unit, f.example, what=what)
-
-
-#: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over
-#: two periods: the impact times and velocities).
-REPEAT_TOL = 1e-6
-
-
-def _check_repeats(orbit) -> None:
-    """Refuse a one-impact orbit of the circuit that :func:`impactbar.simulate`, restarted from its
-    state after the impact (the pressures and the valve's opening as ``start_pressures``, the drive's
-    discrete state from them), does not repeat over two periods to :data:`REPEAT_TOL`: the orbit's
-    discrete state (the valve, the accumulator's and the relief valve's flags) would disagree with
-    its continuous state, a solution of the equations that is not the machine's motion."""
-    import dataclasses
-
-    from ..simulation import InitialState, simulate
-
-    if orbit.impacts != 1:
-        return
-    M = orbit.model.n_modes + 1
-    y = np.asarray(orbit.states_after_impact[0], dtype=float)
-    drive = dataclasses.replace(orbit.drive, start_pressures=tuple(orbit.drive_states[0]))
-    T = orbit.period
-    run = simulate(orbit.model, drive, InitialState(y[:M], y[M:]), 2.0 * T * (1.0 + 1e-3), max_impacts=2)
-    times, speeds = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
-    v = orbit.impact_velocity
-    if times.size < 2 or np.max(np.abs(times - T * np.arange(1, 3))) > REPEAT_TOL * T * 2 \
-            or np.max(np.abs(speeds - v)) > REPEAT_TOL * abs(v):
-        t1 = times.min() if times.size else math.nan  # (the first impact's time)
-        first = f"{t1 / T:.6g}" if times.size else "none"
-        rest = [b - a for a, b in np.asarray(run.contact_intervals).reshape(-1, 2)
-                if times.size and abs(a - t1) <= REPEAT_TOL * T and b > a]
-        if orbit.model.R == 0.0 and rest:  # (theory: at R = 0 the load must pull the end away at once)
-            raise ValueError(f"find_orbit's orbit (period {T:.6g}) leaves the stop at once after its "
-                             "plastic impact (stop.restitution = 0), but the net force then pushes the "
-                             f"piston on the stop: simulate rests it there {rest[0] / T:.3g} periods, so the "
-                             "orbit passes through the stop, not a motion of the circuit (an orbit with a "
-                             "rest on the stop is not solved: give stop.restitution > 0)")
-        raise ValueError(f"find_orbit's orbit (period {T:.6g}) does not repeat when simulate restarts it "
-                         f"from its state after the impact (the first interval {first} periods): not a "
-                         "motion of the circuit")
 
 
 def _least_pressures(pieces) -> dict:

@@ -2,7 +2,14 @@
 (:func:`~impactbar.physical.optimize_drifter`): its record, with why it has none, what the
 evaluation cost and, where it has no one-impact orbit, what the drill does there instead: its motion
 from rest classified as a design map's ``settle`` task classifies it
-(:func:`~impactbar.physical.settle.settle_point`: blows per cycle, chatter).
+(:func:`~impactbar.physical.settle.settle_point`: blows per cycle, chatter), and whether a one-impact
+orbit exists all the same, one the rest on the stop does not reach (a circuit drifter's, from rest
+at the valve's switch point: :func:`switch_orbit`).
+
+"No one-impact orbit" in a record says what the default chain of ``orbit()`` found from its one start,
+rest on the stop, not that the drill has none: a design the restarted searches met (its front
+annulus 0.39 mm^2) has none from there (the piston buzzes on the shank) and a stable one from the
+switch point.
 
 A design without a one-impact orbit costs about what one with an orbit costs: Newton's method gives
 up where its steps stall (:data:`~impactbar.drives.orbitproblem.STALL_STEPS`), so that the default
@@ -19,6 +26,7 @@ import math
 
 __all__ = ["ERROR_CHARS", "MOTION_BLOWS", "MOTION_MOST_BLOWS", "FAILED_ROWS", "NOT_CLASSIFIED",
            "failed_record", "classify_failed", "classify_listed", "listed_failures", "motion_summary",
+           "switch_orbit", "switch_summary",
            "design_text", "failures_table"]
 
 #: The most characters of the error a failed design's record keeps (its first line): the default
@@ -88,7 +96,8 @@ def classify_failed(record: dict, drifter) -> dict:
     r"""What the drill does at a design without a one-impact orbit: its motion from rest over
     :data:`MOTION_BLOWS` blows, up to :data:`MOTION_MOST_BLOWS` where that cannot tell, classified
     as a design map's ``settle`` task classifies it (:func:`~impactbar.physical.settle.settle_point`;
-    theory §11, "Optimising a drifter"), written into its record.
+    theory §11, "Optimising a drifter"), written into its record; for a circuit drifter also the
+    one-impact orbit from rest at the valve's switch point, where one exists (:func:`switch_orbit`).
 
     Parameters
     ----------
@@ -103,7 +112,9 @@ def classify_failed(record: dict, drifter) -> dict:
     dict
         ``record``, with ``motion`` (the ``settle`` task's figures in SI, or ``{"error": ...}`` where
         the run is refused: the oil cavitates), ``motion_summary`` (:func:`motion_summary`) and
-        ``motion_seconds`` (the classification's wall time, s).
+        ``motion_seconds`` (the classification's wall time, s); a circuit drifter's also
+        ``switch_orbit`` (:func:`switch_orbit`), ``switch_summary`` (:func:`switch_summary`) and
+        ``switch_seconds``.
 
     Raises
     ------
@@ -124,7 +135,75 @@ def classify_failed(record: dict, drifter) -> dict:
         motion = {"error": str(err).splitlines()[0][:ERROR_CHARS]}
     record.update(motion=motion, motion_summary=motion_summary(motion),
                   motion_seconds=time.perf_counter() - t0)
+    from .circuit import CircuitDrifter
+
+    if isinstance(drifter, CircuitDrifter):  # (whether an orbit exists that rest does not reach)
+        t0 = time.perf_counter()
+        found = switch_orbit(drifter)
+        record.update(switch_orbit=found, switch_summary=switch_summary(found),
+                      switch_seconds=time.perf_counter() - t0)
     return record
+
+
+def switch_orbit(drifter) -> dict:
+    """A circuit drifter's one-impact orbit from the piston at rest at the valve's switch point
+    (:func:`~impactbar.physical.circuit_switch.switch_start_orbit`, checked by a restart), where the
+    default chain's start, rest on the stop, finds none: its figures in SI, or why there is none.
+
+    Parameters
+    ----------
+    drifter : CircuitDrifter
+        The design (its default chain already failed).
+
+    Returns
+    -------
+    dict
+        ``stable``, ``max_multiplier`` (the largest multiplier's modulus), ``period_s``,
+        ``blow_frequency_Hz``, ``impact_velocity_m_s``, ``cavitates`` and ``border_margins_Pa`` (the
+        relief's negative where it opens during the period); or ``{"error": ...}`` (its first line,
+        at most :data:`ERROR_CHARS` characters).
+    """
+    import numpy as np
+
+    from .circuit import CircuitDrifterOrbit
+    from .circuit_switch import switch_start_orbit
+
+    try:
+        point = CircuitDrifterOrbit(drifter, switch_start_orbit(drifter))
+    except ValueError as err:
+        return {"error": str(err).splitlines()[0][:ERROR_CHARS]}
+    return {"stable": bool(point.stable), "max_multiplier": float(np.abs(point.orbit.multipliers).max()),
+            "period_s": float(point.period_s), "blow_frequency_Hz": float(point.blow_frequency_Hz),
+            "impact_velocity_m_s": float(point.impact_velocity_m_s), "cavitates": bool(point.cavitates),
+            "border_margins_Pa": {k: float(v) for k, v in point.border_margins_Pa.items()}}
+
+
+def switch_summary(found: dict) -> str:
+    """One line saying whether a one-impact orbit exists from rest at the switch point
+    (:func:`switch_orbit`'s figures).
+
+    Examples
+    --------
+    >>> from impactbar.physical.optimize_failures import switch_summary
+    >>> switch_summary({"stable": True, "max_multiplier": 0.575, "blow_frequency_Hz": 50.26,
+    ...                 "impact_velocity_m_s": 8.918, "cavitates": False,
+    ...                 "border_margins_Pa": {"relief": -6.1e5}})
+    'from rest at the switch point: a stable one-impact orbit (|mu| 0.575), 50.3 Hz, 8.92 m/s, relief open'
+    >>> switch_summary({"error": "the rear chamber empties"})
+    'from rest at the switch point: no one-impact orbit either (the rear chamber empties)'
+    """
+    head = "from rest at the switch point:"
+    if "error" in found:
+        why, _, _ = found["error"].partition("; ")
+        return f"{head} no one-impact orbit either ({why})"
+    said = [f"{head} a{' stable' if found['stable'] else 'n unstable'} one-impact orbit "
+            f"(|mu| {found['max_multiplier']:.3g})", f"{found['blow_frequency_Hz']:.3g} Hz",
+            f"{found['impact_velocity_m_s']:.3g} m/s"]
+    if found["border_margins_Pa"].get("relief", 0.0) < 0.0:
+        said.append("relief open")
+    if found["cavitates"]:
+        said.append("cavitating")
+    return ", ".join(said)
 
 
 def listed_failures(history: list, most: int = FAILED_ROWS) -> list:
@@ -254,8 +333,9 @@ def design_text(values: dict, vary: dict) -> str:
 def failures_table(history: list, vary: dict, most: int = FAILED_ROWS) -> str:
     """The designs without an operating point among ``history``: how many, what their evaluations
     and their motions' classification cost (s, against a design with one on average), and, one line
-    each (at most ``most``, the first), the design, why it has none (its error's first clause) and
-    what the drill does there (:func:`motion_summary`).
+    each (at most ``most``, the first), the design, why it has none (its error's first clause),
+    what the drill does there from rest (:func:`motion_summary`) and whether a one-impact orbit
+    exists from rest at the switch point (:func:`switch_summary`).
 
     Parameters
     ----------
@@ -291,13 +371,13 @@ def failures_table(history: list, vary: dict, most: int = FAILED_ROWS) -> str:
         return ""
     ok = [r["seconds"] for r in history if r.get("ok") and "seconds" in r]
     cost = sum(r.get("seconds", 0.0) for r in failed)
-    motion = sum(r.get("motion_seconds", 0.0) for r in failed)
+    motion = sum(r.get("motion_seconds", 0.0) + r.get("switch_seconds", 0.0) for r in failed)
     against = f"; {sum(ok) / len(ok):.3g} s one with" if ok else ""
     rows = [f"{len(failed)} of {len(history)} designs without an operating point ({cost:.3g} s + "
             f"{motion:.3g} s classifying their motion{against}):"]
     for r in listed:
         why, _, _ = r["error"].partition("; ")
-        said = f"; {r['motion_summary']}" if "motion_summary" in r else ""
+        said = "".join(f"; {r[k]}" for k in ("motion_summary", "switch_summary") if k in r)
         rows.append(f"  {design_text(r['values'], vary) if 'values' in r else 'a design'}: {why}{said}")
     if len(failed) > most:
         rows.append(f"  and {len(failed) - most} more (the JSON result's history)")
