@@ -38,7 +38,7 @@ def check_repeats(orbit, first: float | None = None) -> None:
     state after the impact (the pressures and the valve's opening as ``start_pressures``, the drive's
     discrete state from them), does not repeat over two periods to :data:`REPEAT_TOL`: the orbit's
     discrete state (the valve, the accumulator's and the relief valve's flags) would disagree with
-    its continuous state, a solution of the equations that is not the machine's motion.
+    its continuous state, a solution of the equations that is not the machine's motion (theory §10).
 
     Parameters
     ----------
@@ -92,7 +92,7 @@ def switch_start_orbit(drifter, model=None, drive=None):
     :func:`impactbar.simulate` from there (the circuit at its start pressures, the valve on the
     stroke) to its :data:`SWITCH_RUN_IMPACTS`-th impact, at most :data:`SWITCH_RUN_S` long, handed
     to :func:`impactbar.find_orbit` as its guess; the orbit checked by a restart
-    (:func:`check_repeats`, from its arrival).
+    (:func:`check_repeats`, from its arrival). Theory §10 (the drive's orbit and its guesses), §11.
 
     Parameters
     ----------

@@ -148,7 +148,8 @@ def classify_failed(record: dict, drifter) -> dict:
 def switch_orbit(drifter) -> dict:
     """A circuit drifter's one-impact orbit from the piston at rest at the valve's switch point
     (:func:`~impactbar.physical.circuit_switch.switch_start_orbit`, checked by a restart), where the
-    default chain's start, rest on the stop, finds none: its figures in SI, or why there is none.
+    default chain's start, rest on the stop, finds none: its figures in SI, or why there is none
+    (theory §11, "Optimising a drifter").
 
     Parameters
     ----------
@@ -180,7 +181,18 @@ def switch_orbit(drifter) -> dict:
 
 def switch_summary(found: dict) -> str:
     """One line saying whether a one-impact orbit exists from rest at the switch point
-    (:func:`switch_orbit`'s figures).
+    (:func:`switch_orbit`'s figures; theory §11, "Optimising a drifter").
+
+    Parameters
+    ----------
+    found : dict
+        :func:`switch_orbit`'s figures, or its ``{"error": ...}``.
+
+    Returns
+    -------
+    str
+        The orbit's stability (the largest multiplier's modulus), blow frequency, impact velocity and
+        whether the relief valve opens or the oil cavitates; else the error's first clause.
 
     Examples
     --------
