@@ -8,8 +8,8 @@ continued along its collar from 47.3 mm down to its own 47 mm (as ``existence_bo
 period, impact velocity, largest multiplier, relief margin and event pattern (the drive's discrete
 states in order); the orbit ``orbit(switch_start=True)`` finds, its cost and its distance from the
 continued one; ``simulate`` restarted from that orbit (30 periods: its impacts against the orbit's);
-runs of ``simulate`` from rest on the stop, from rest at the switch point (the supply at its start
-pressure) and from there with the supply at the relief's setting (their last impacts). Then the
+runs of ``simulate`` from rest on the stop and from rest at the switch point, each with the supply at
+its start pressure and at the relief's setting (their last impacts). Then the
 same start on the documented multistart's designs without a one-impact orbit
 (``drifter_optimum.DOCUMENTED_NO_ORBIT``, the example's own settings) and on the lattice band's
 ``collar(1.01)`` and ``SEARCHED``.
@@ -68,7 +68,10 @@ def _runs(drifter) -> None:
     L, om = drifter.bar.length_m, drifter.omega_rad_s
     p_rel, tank = drive.supply.relief_pressure, drive.supply.tank_pressure
     top = drive.valve.switch_out
-    for name, gap, start in (("rest on the stop", 0.0, None), ("rest at the switch point", top, None),
+    for name, gap, start in (("rest on the stop", 0.0, None),
+                             ("rest on the stop, the supply at the relief's setting", 0.0,
+                              (p_rel, tank, p_rel, 0.0)),
+                             ("rest at the switch point", top, None),
                              ("the switch point, the supply at the relief's setting", top,
                               (p_rel, tank, p_rel, 1.0))):
         d = drive if start is None else dataclasses.replace(drive, start_pressures=start)
