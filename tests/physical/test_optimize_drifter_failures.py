@@ -1,7 +1,8 @@
-"""Designs of the whole-drifter optimiser without a one-impact orbit: what their evaluation costs
-(about what a design with an orbit costs) and what their record says. The designs are those the
-documented search met with the blows ended at the law's fixed window, and are built so
-(``drifter_optimum.window_end``)."""
+"""Designs of the whole-drifter optimiser without a one-impact orbit from ``orbit()``'s default chain
+(its one start, rest on the stop): what their evaluation costs (about what a design with an orbit
+costs) and what their record says, what the drill does there from rest and whether an orbit exists
+all the same (from rest at the switch point). The designs are those the documented search met with
+the blows ended at the law's fixed window, and are built so (``drifter_optimum.window_end``)."""
 
 from __future__ import annotations
 
