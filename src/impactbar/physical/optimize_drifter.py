@@ -53,7 +53,6 @@ import hashlib
 import json
 import math
 import time
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -65,7 +64,7 @@ from .drifter import Drifter
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_border import EXISTENCE, BorderScore, border_score, existence_gradient, existence_margin
-from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
+from .optimize_cache import DesignCache, OrbitChain
 from .optimize_failures import classify_listed, failed_record
 from .optimize_integers import integer_search
 from .optimize_multistart import check_multistart, multistart_search
@@ -161,10 +160,12 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         re-evaluation); for SLSQP the most iterations, each its line search's designs (one where its
         full step is accepted; 252 designs for 30 on the example rock drifter).
     cache : str or os.PathLike, optional
-        A JSON file of the designs evaluated: read first (a run stopped part-way resumes from it, the
-        search visiting the same designs), written after every evaluation. Keyed by the problem (the
-        config, the variables and bounds, the objective, the constraints): a cache of another
-        problem is not reused, and is overwritten. A resumed run visits the designs of a run never
+        A file of the designs evaluated: read first (a run stopped part-way resumes from it, the
+        search visiting the same designs), each design appended to it as one JSON line when it is
+        evaluated (:class:`~impactbar.physical.optimize_cache.DesignCache`; a file of the format
+        before, one JSON document, is read too). Keyed by the problem (the config, the variables and
+        bounds, the objective, the constraints): a cache of another problem is not reused, and is
+        overwritten. A resumed run visits the designs of a run never
         stopped, with the same figures to the bit: a design read from it carries its figures, not
         its orbit, and where a new design continues from one, that orbit is solved again as the first
         run solved it, along the designs' recorded guesses
@@ -347,9 +348,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective,
                        dict(limits, impact_velocity=V) if ideal else limits)
 
-    cache_path = Path(cache) if cache is not None else None
-    store = read_cache(cache_path, tag)
-    stored_gradients = read_gradients(cache_path, tag)  # (a run started again: none computed twice)
+    log = DesignCache(cache, tag)  # (a run started again: no design, no gradient computed twice)
+    store, stored_gradients = log.designs, log.gradients
     n_cached = 0
     near: list[_Near] = []  # the designs with an orbit: their scaled variables, ids
     history: list[dict] = []
@@ -407,11 +407,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             rec = failed_record(exc, time.perf_counter() - t0, None if ideal else drifter, classify=False)
         rec.update(id=rid, values=values, changes=changes)
-        store[rid] = rec
+        log.add(rec)  # (store[rid])
         history.append(rec)
         counter["new"] += 1
-        if cache_path is not None:
-            write_cache(cache_path, tag, store, stored_gradients)
         bar.design(rec["seconds"])
         return rec
 
@@ -447,6 +445,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     "constraints"].values()], existence_margin(success, scale), *grad, d_exists, radius)
                 rec["border"] = {"nearest": nid, **s.as_record(),
                                  **({} if which == "default" else {"gradient": which})}
+                log.changed(rec)  # (written again with the cache's next line)
             return rec.get("border")
 
         def exists_model(at, which: str):
@@ -492,9 +491,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
                     gradients[key] = compute(cfg, folder, rec, orbit, spec, limits, fkey, span)
                     counter["gradients"] += 1
-                    stored_gradients[key] = gradients[key]._asdict()
-                    if cache_path is not None:
-                        write_cache(cache_path, tag, store, stored_gradients)
+                    log.add_gradient(*key, gradients[key]._asdict())
             return gradients[key]
 
         def model_gradient(u, which: str = "default"):
@@ -571,10 +568,11 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     finally:
         bar.close()
         cluster.close()
+        log.close()
     # what the drill does at the designs without a one-impact orbit that the result lists (the search
     # classified none: the motion from rest costs several evaluations)
-    if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)) and cache_path:
-        write_cache(cache_path, tag, store, stored_gradients)
+    if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)):
+        log.rewrite()  # (their records changed: the file written anew, once)
     # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache; the best
     # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
     # some 1e-9 from the fresh one's, a design at an active limit on its other side)
