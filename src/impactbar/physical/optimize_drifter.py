@@ -198,9 +198,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         Where a population's or a sample's designs are evaluated (those two methods only):
         ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
         (started and closed by the call), or a client's cluster; the same records either way. The
-        multistart's polish computes its gradients' columns there too (two steps of
-        :func:`~impactbar.physical.optimize_problem._refined_gradient` a round) on more than one
-        worker or a client's cluster: the same gradients as in this process, to the bit.
+        multistart's polish and its certificate compute their gradients' columns there too (two
+        steps of :func:`~impactbar.physical.optimize_problem._refined_gradient` a round) on more
+        than one worker or a client's cluster: the same gradients as in this process, to the bit.
     popsize, seed : int
         The population per variable (at least 2) and the random seed (at least 0) of
         ``method="differential_evolution"`` (``"multistart"``: the sample's seed).
@@ -417,8 +417,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     bar = DesignProgress(None if method == "slsqp" else max_evaluations, progress)
     start = np.array([spec[k]["start"] for k in keys])
     u0 = (start - lo) / span
-    cluster = contextlib.ExitStack()  # (the multistart's workers, open through its polish)
-    spread = None  # the multistart's map on its workers: the polish's gradients' columns computed there
+    cluster = contextlib.ExitStack()  # (the multistart's workers, open through its polish and certificate)
+    spread = None  # the multistart's map on its workers: the polish's, the certificate's gradient columns
     try:
         first = check_start(evaluate(u0), any_start)
         ref = abs(first["objectives"][fkey]) or 1.0
@@ -565,53 +565,58 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                            options={"ftol": tol ** 3, "maxiter": max_evaluations})
         message = str(res.message) + ("" if polished is None else f"; {polished.summary}")
         bar.finish()
+    except BaseException:
+        cluster.close()
+        raise
     finally:
         bar.close()
-        cluster.close()
         log.close()
-    # what the drill does at the designs without a one-impact orbit that the result lists (the search
-    # classified none: the motion from rest costs several evaluations)
-    if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)):
-        log.rewrite()  # (their records changed: the file written anew, once)
-    # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache; the best
-    # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
-    # some 1e-9 from the fresh one's, a design at an active limit on its other side)
-    fresh = {}
-    ranked = sorted((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey],
-                    reverse=True)
-    if not ranked:  # (a start="any" search that found no feasible design: the least infeasible reported)
-        ranked = [max((r for r in history if r.get("ok")), key=least_margin)]
-        message += (f"; no feasible design found: the design reported is the least infeasible (its "
-                    f"smallest scaled margin {least_margin(ranked[0]):.3g})")
-    for name, rec in [("baseline", first)] + [("optimum", r) for r in ranked]:
-        if "optimum" in fresh and fresh["optimum"]["feasible"]:
-            break
-        best = rec
-        out = fresh_record(rec["changes"], values=rec["values"], changes=rec["changes"])
-        out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
-                                        for k in rec["objectives"] if rec["objectives"][k] != 0.0)
-        if name == "optimum" and "optimum" in fresh:
-            message += "; the best design's fresh orbit missed a constraint, the next best kept"
-        fresh[name] = out
-    message += _better_missed(history, best, fkey)
-    # the polish's design reported: resolved by SLSQP (no step of COBYLA's), its stop SLSQP's
-    by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
+    with cluster:  # (the multistart's workers, open through the certificate: its gradient's columns there)
+        # what the drill does at the designs without a one-impact orbit that the result lists (the search
+        # classified none: the motion from rest costs several evaluations)
+        if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)):
+            log.rewrite()  # (their records changed: the file written anew, once)
+        # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache; the best
+        # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
+        # some 1e-9 from the fresh one's, a design at an active limit on its other side)
+        fresh = {}
+        ranked = sorted((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey],
+                        reverse=True)
+        if not ranked:  # (a start="any" search that found no feasible design: the least infeasible reported)
+            ranked = [max((r for r in history if r.get("ok")), key=least_margin)]
+            message += (f"; no feasible design found: the design reported is the least infeasible (its "
+                        f"smallest scaled margin {least_margin(ranked[0]):.3g})")
+        for name, rec in [("baseline", first)] + [("optimum", r) for r in ranked]:
+            if "optimum" in fresh and fresh["optimum"]["feasible"]:
+                break
+            best = rec
+            out = fresh_record(rec["changes"], values=rec["values"], changes=rec["changes"])
+            out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
+                                            for k in rec["objectives"] if rec["objectives"][k] != 0.0)
+            if name == "optimum" and "optimum" in fresh:
+                message += "; the best design's fresh orbit missed a constraint, the next best kept"
+            fresh[name] = out
+        message += _better_missed(history, best, fkey)
+        # the polish's design reported: resolved by SLSQP (no step of COBYLA's), its stop SLSQP's
+        by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
 
-    def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
-        _, record, _ = fresh_design(design_of(v).changes)
-        return record
+        def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
+            _, record, _ = fresh_design(design_of(v).changes)
+            return record
 
-    try:  # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)
-        certificate = certify_search(fresh["optimum"], history, keys, (lo, span),
-                                     polished if by_polish else res, tol, fkey,
-                                     fresh_of if ideal or kind == "drifter" else None,
-                                     lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec,
-                                                               limits, fkey, span),
-                                     tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
-    except ValueError as exc:
-        if kind == "circuit":
-            raise
-        certificate, message = None, message + f"; no certificate: a neighbour has no operating point ({exc})"
+        # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)
+        try:
+            certificate = certify_search(fresh["optimum"], history, keys, (lo, span),
+                                         polished if by_polish else res, tol, fkey,
+                                         fresh_of if ideal or kind == "drifter" else None,
+                                         lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec,
+                                                                   limits, fkey, span, run=spread),
+                                         tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
+        except ValueError as exc:
+            if kind == "circuit":
+                raise
+            certificate = None
+            message += f"; no certificate: a neighbour has no operating point ({exc})"
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
                                 for k in keys},
