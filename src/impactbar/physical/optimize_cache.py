@@ -203,7 +203,8 @@ class DesignCache:
 
     def changed(self, record: dict) -> None:
         """A kept design's record changed in place: written again with the next line written."""
-        self._changed[record["id"]] = record
+        if self.path is not None:
+            self._changed[record["id"]] = record
 
     def rewrite(self) -> None:
         """The file written anew, atomically (a file beside it, then renamed): the problem, each
