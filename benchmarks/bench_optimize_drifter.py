@@ -24,7 +24,9 @@ timed in the search's process; a sample's designs on workers by their records' s
 classification after the search of the designs the result lists (a tree that classifies none in
 the search), all designs' CPU seconds, the wall and CPU time of the call, the certificate's verdict
 and KKT residual (``none`` on a tree without one) and the gain, e.g. ``--against 15d5b20`` (before
-the certificate, the stall test and the failures' classification).
+the certificate, the stall test and the failures' classification). With ``--cache FILE`` each tree
+writes its own cache file, started empty (``FILE`` with the tree's tag before its suffix), and the
+rows add the seconds of the cache's writes, of the certificate, and the file's bytes.
 """
 
 from __future__ import annotations
@@ -64,12 +66,18 @@ def _phases():
     """The wall seconds of the multistart's phases: the sample's designs computed together
     (``compute_new``, on the workers) and the polish (``polish_search``); the local searches and the
     rest (the fresh re-evaluation, the certificate) are the call's wall time less those. Under
-    ``"<phase> CPU"`` the CPU seconds this process spent in each (the workers' not counted)."""
+    ``"<phase> CPU"`` the CPU seconds this process spent in each (the workers' not counted). Apart,
+    the certificate (``certify_search``, its gradient on the workers on a tree that keeps them open)
+    and the cache file's writes (a tree's ``write_cache``, the whole file, or its log's lines)."""
+    import impactbar.physical.optimize_cache as cache
     import impactbar.physical.optimize_multistart as multistart
 
     module = inspect.getmodule(optimize_drifter)
-    walls = {"sample": 0.0, "polish": 0.0, "sample CPU": 0.0, "polish CPU": 0.0}
-    saved = [(multistart, "compute_new", "sample"), (module, "polish_search", "polish")]
+    walls = {f"{phase}{cpu}": 0.0 for phase in ("sample", "polish", "certificate", "cache writes")
+             for cpu in ("", " CPU")}
+    saved = [(multistart, "compute_new", "sample"), (module, "polish_search", "polish"),
+             (module, "certify_search", "certificate"), (module, "write_cache", "cache writes"),
+             *((getattr(cache, "DesignCache", None), n, "cache writes") for n in ("_write", "rewrite"))]
 
     def timed(fn, phase):
         def wrapper(*args, **kwargs):
@@ -81,7 +89,7 @@ def _phases():
                 walls[f"{phase} CPU"] += time.process_time() - c0
         return wrapper
 
-    kept = [(m, n, phase, getattr(m, n)) for m, n, phase in saved if hasattr(m, n)]
+    kept = [(m, n, phase, getattr(m, n)) for m, n, phase in saved if m is not None and hasattr(m, n)]
     for m, n, phase, fn in kept:
         setattr(m, n, timed(fn, phase))
     try:
@@ -160,7 +168,11 @@ def summary(res, wall: float, cpu: float, calls: dict, walls: dict | None = None
             **({} if walls is None else {"sample wall s": walls["sample"], "polish wall s": walls["polish"],
                                          "polish CPU s": walls["polish CPU"], "the rest wall s": wall
                                          - walls["sample"] - walls["polish"], "the rest CPU s": cpu
-                                         - walls["sample CPU"] - walls["polish CPU"]}),
+                                         - walls["sample CPU"] - walls["polish CPU"],
+                                         "certificate wall s": walls["certificate"],
+                                         "certificate CPU s": walls["certificate CPU"],
+                                         "cache writes wall s": walls["cache writes"],
+                                         "cache writes CPU s": walls["cache writes CPU"]}),
             "certificate": cert.verdict if cert is not None else "none",
             "KKT residual": cert.residual if cert is not None else None,
             "gain %": 100.0 * res.gain, OBJECTIVES[res.objective][0]: res.optimum["objectives"][
@@ -213,6 +225,12 @@ def main(argv=None) -> None:
     if args.quick:
         args.method, args.keys, args.sample, args.local_starts = "multistart", ",".join(QUICK), 8, 1
         args.max_evaluations = 16
+    if args.json and args.cache:  # (--against's child: each tree its own cache file, started empty)
+        import impactbar
+
+        tree = hashlib.sha1(str(Path(impactbar.__file__).parent).encode()).hexdigest()[:8]
+        args.cache = str(Path(args.cache).with_suffix(f".{tree}{Path(args.cache).suffix}"))
+        Path(args.cache).unlink(missing_ok=True)
     keys = FOUR if args.keys == "four" else (args.keys.split(",") if args.keys else tuple(VARY))
     vary = {k: VARY[k] for k in keys}
     config, folder = read_config(EXAMPLE)
@@ -234,7 +252,9 @@ def main(argv=None) -> None:
     cpu = time.process_time() - c0
     wall = time.perf_counter() - t
     if args.json:
-        print(json.dumps(summary(res, wall, cpu, calls, walls if args.method == "multistart" else None)))
+        done = summary(res, wall, cpu, calls, walls if args.method == "multistart" else None)
+        print(json.dumps(dict(done, **({"cache file bytes": Path(args.cache).stat().st_size} if args.cache
+                                       else {}))))
         return
     print(res.table())
     print(f"one baseline evaluation (fresh orbit): {one:.1f} s; optimize_drifter ({args.method}, "

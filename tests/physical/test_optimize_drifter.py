@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cache_log import cache_log
 
 from impactbar.physical import build, optimize_drifter, read_config, with_values
 from impactbar.physical.geometry import piston_geometry
@@ -425,7 +426,7 @@ def test_a_stopped_run_resumes_from_its_cache(tmp_path):
     vary = {"valve.switch_out": ("19 mm", "24 mm"), "accumulator.precharge": ("8 MPa", "12 MPa")}
     short = optimize_drifter("circuit-drifter", vary, objective="impact_power", max_evaluations=4,
                              cache=cache, progress=False)
-    stored = json.loads(cache.read_text())["evaluations"]
+    stored = cache_log(cache)[1]
     assert len(stored) == short.evaluations == len(short.history)
     full = optimize_drifter("circuit-drifter", vary, objective="impact_power", max_evaluations=8, cache=cache,
                             progress=False)

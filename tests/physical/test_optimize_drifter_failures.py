@@ -12,6 +12,7 @@ import re
 
 import numpy as np
 import pytest
+from cache_log import cache_log
 from drifter_optimum import BUZZING, EXAMPLE, SEARCHED, collar, window_end
 
 import impactbar
@@ -335,6 +336,6 @@ def test_the_search_classifies_no_motion_and_after_it_those_its_result_lists(mon
     assert [x for _, x in got] == [r["values"]["valve.switch_out"] for r in failed[:5]]
     assert all(r["motion"] == _MOTION for r in failed[:5])
     assert all(r["motion_summary"] == NOT_CLASSIFIED for r in failed[5:])
-    kept = {r["id"]: r for r in json.loads(cache.read_text())["evaluations"]}
+    kept = {r["id"]: r for r in cache_log(cache)[1]}
     assert all(kept[r["id"]]["motion"] == _MOTION for r in failed[:5])
     assert "settles into a period-2 motion" in res.table()

@@ -6,13 +6,13 @@ designs, bit for bit."""
 from __future__ import annotations
 
 import io
-import json
 import re
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cache_log import cache_log
 
 from impactbar.physical import build, optimize_drifter, read_config, with_values
 from impactbar.physical.config import config_kind, read_toml
@@ -303,8 +303,8 @@ def test_slsqp_keeps_its_better_design_along_an_active_cap():
 def test_a_run_stopped_part_way_resumes_to_the_same_designs_bit_for_bit(tmp_path, monkeypatch, method, budget,
                                                                          stop):
     """A run interrupted at a new design (COBYLA's fifth, SLSQP's fourth: its gradients start from the
-    designs' orbits too) and started again on its cache visits the designs of a run never stopped,
-    with the same figures, to the bit."""
+    designs' orbits too), or in the middle of writing the design before, and started again on its
+    cache visits the designs of a run never stopped, with the same figures, to the bit."""
     od = sys.modules["impactbar.physical.optimize_drifter"]
     kwargs = {"objective": "impact_power", "max_evaluations": budget, "method": method, "progress": False}
     whole = optimize_drifter("circuit-drifter", VARY, **kwargs)
@@ -322,14 +322,22 @@ def test_a_run_stopped_part_way_resumes_to_the_same_designs_bit_for_bit(tmp_path
     with pytest.raises(KeyboardInterrupt):
         optimize_drifter("circuit-drifter", VARY, cache=cache, **kwargs)
     monkeypatch.setattr(od, "evaluate_design", original)
-    assert len(json.loads(cache.read_text())["evaluations"]) == stop - 1
-    resumed = optimize_drifter("circuit-drifter", VARY, cache=cache, **kwargs)
-    assert resumed.cached == stop - 1 and resumed.evaluations == len(whole.history) - stop + 1
-    assert [r["values"] for r in resumed.history] == [r["values"] for r in whole.history]
-    assert [r["objectives"] for r in resumed.history] == [r["objectives"] for r in whole.history]
-    assert resumed.optimum["values"] == whole.optimum["values"]
-    assert np.array_equal([r["constraints"]["max_multiplier"]["value"] for r in resumed.history],
-                          [r["constraints"]["max_multiplier"]["value"] for r in whole.history])
+    assert len(cache_log(cache)[1]) == stop - 1
+    # and stopped in the middle of writing its last line (a design's, SLSQP's a gradient's; cut short):
+    # that design or gradient is read as never computed
+    torn = tmp_path / "torn.json"
+    text = cache.read_bytes()
+    torn.write_bytes(text[:(text.rstrip(b"\n").rfind(b"\n") + len(text)) // 2])
+    assert sum(map(len, cache_log(torn)[1:])) == sum(map(len, cache_log(cache)[1:])) - 1
+    for path in (cache, torn):
+        read = len(cache_log(path)[1])
+        resumed = optimize_drifter("circuit-drifter", VARY, cache=path, **kwargs)
+        assert resumed.cached == read and resumed.evaluations == len(whole.history) - read
+        assert [r["values"] for r in resumed.history] == [r["values"] for r in whole.history]
+        assert [r["objectives"] for r in resumed.history] == [r["objectives"] for r in whole.history]
+        assert resumed.optimum["values"] == whole.optimum["values"]
+        assert np.array_equal([r["constraints"]["max_multiplier"]["value"] for r in resumed.history],
+                              [r["constraints"]["max_multiplier"]["value"] for r in whole.history])
 
 
 def test_a_run_again_on_its_cache_reads_its_gradients_back_bit_for_bit(tmp_path):
@@ -341,8 +349,8 @@ def test_a_run_again_on_its_cache_reads_its_gradients_back_bit_for_bit(tmp_path)
               "cache": cache}
     first = optimize_drifter("circuit-drifter", VARY, **kwargs)
     assert first.gradients >= 1 and first.cached_gradients == 0
-    kept = json.loads(cache.read_text())["gradients"]
-    assert len(kept) == first.gradients and {g["kind"] for g in kept} == {"default"}
+    kept = cache_log(cache)[2]
+    assert len(kept) == first.gradients and {kind for _, kind in kept} == {"default"}
     again = optimize_drifter("circuit-drifter", VARY, **kwargs)
     assert again.gradients == 0 and again.cached_gradients == first.gradients
     assert again.evaluations == 0 and again.cached == len(first.history)

@@ -6,7 +6,9 @@ the seed makes the run reproducible, bit for bit; bad input is one line."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -129,6 +131,40 @@ def test_a_local_cluster_gives_the_same_polish_bit_for_bit():
     cert, again = one.certificate, par.certificate
     assert (again.verdict, again.residual, again.active) == (cert.verdict, cert.residual, cert.active)
     np.testing.assert_array_equal(again.objective_gradient, cert.objective_gradient)
+
+
+def test_the_certificates_gradient_columns_on_workers_are_the_serial_ones(run, monkeypatch):
+    """With workers, the certificate's refined gradient (of the optimum's fresh orbit) computes its
+    columns on them too, the cluster open till then: by a map standing in for the cluster's (in this
+    process, recording what it is asked), the columns of the first two steps asked together, and the
+    same certificate as the search's in this process, to the bit."""
+    od = sys.modules["impactbar.physical.optimize_drifter"]
+    asked = []
+
+    @contextlib.contextmanager
+    def record_map(workers):
+        assert workers == 2
+        closed = []
+
+        def mapped(fn, items, **common):
+            assert not closed  # (asked while the cluster is open)
+            items = list(items)
+            if "continued_vs_fresh" in common.get("rec", {}):  # (the optimum's fresh record)
+                asked.append((fn.__name__, common["rec"]["values"], sorted({step for step, _ in items})))
+            return [fn(item, **common) for item in items]
+
+        yield mapped
+        closed.append(True)
+
+    monkeypatch.setattr(od, "record_map", record_map)
+    par = optimize_drifter("circuit-drifter", VARY, workers=2, **KW)
+    assert asked and asked[0][0] == "_step_column" and len(asked[0][2]) == 2
+    assert all(values == run.optimum["values"] for _, values, _ in asked)
+    cert, again = run.certificate, par.certificate
+    assert (again.verdict, again.residual, again.active) == (cert.verdict, cert.residual, cert.active)
+    np.testing.assert_array_equal(again.objective_gradient, cert.objective_gradient)
+    assert again.constraint_gradients == cert.constraint_gradients
+    assert np.any(cert.objective_gradient != 0.0)
 
 
 def test_the_refined_gradients_columns_on_workers_are_the_serial_ones():

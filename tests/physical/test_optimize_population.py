@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+from cache_log import cache_log
 
 from impactbar.physical import build, optimize_drifter, read_config, with_values
 from impactbar.physical.optimize_population import FAILED, PENALTY, check_population, penalised
@@ -74,9 +75,9 @@ def test_the_optimum_is_a_fresh_orbits_feasible_and_beats_the_first_generation(s
     # a run stopped part-way resumes on the same path, its new designs the same to the bit (each a
     # fresh orbit, none continued from a design read from the cache; the history lists a generation's
     # new designs before those it read)
-    doc = json.loads(cache.read_text())
-    doc["evaluations"] = doc["evaluations"][:8]
-    cache.write_text(json.dumps(doc))
+    # (from a file of the format before the cache's log: one JSON document, read and written as a log)
+    tag, designs, _ = cache_log(cache)
+    cache.write_text(json.dumps({"problem": tag, "evaluations": designs[:8], "gradients": []}))
     resumed = optimize_drifter("circuit-drifter", VARY, cache=cache, **KW)
     assert resumed.cached == 8 and resumed.evaluations == 10
     assert {r["id"]: _record(r) for r in resumed.history} == {r["id"]: _record(r) for r in res.history}

@@ -1,7 +1,16 @@
-"""The optimiser's cache (:func:`~impactbar.physical.optimize_drifter`): the designs evaluated, as a
-JSON file written after each, and the chain of operating points they were continued along, so
-that a run stopped part-way and started again visits the same designs with the same figures, to
-the bit, as one that was never stopped.
+"""The optimiser's cache (:func:`~impactbar.physical.optimize_drifter`): the designs evaluated and the
+gradients computed of them, a log with one JSON line a record appended as each is finished, and the
+chain of operating points they were continued along, so that a run stopped part-way and started
+again visits the same designs with the same figures, to the bit, as one that was never stopped.
+
+The file (:class:`DesignCache`) is a first line naming the problem, then one line a design
+(``{"design": record}``) or a gradient (``{"gradient": {...}}``), each written whole and flushed
+when it is finished: a run stopped at any point has lost no finished design, and a line cut short
+by the stop (the last, without its end of line) is ignored on reading and cut off before the next
+is written. A design written again (its record changed: a border score added) replaces the one
+before it. Writing a design costs its line, not the whole file's (a file rewritten after each
+design costs the square of their number). A file in the format before the log (one JSON document,
+``{"problem", "evaluations", "gradients"}``) is read, and written once as a log on its first write.
 
 Each design's operating point is Newton from the nearest design evaluated before it (its
 ``guess``, recorded by id with the scaled variables ``u`` it was asked at). A design read from the
@@ -16,9 +25,13 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
-__all__ = ["read_cache", "read_gradients", "write_cache", "dumps", "OrbitChain"]
+__all__ = ["read_cache", "read_gradients", "DesignCache", "dumps", "OrbitChain"]
+
+#: The first line's key of a cache log, its value the format's version.
+LOG_FORMAT = "impactbar_optimize_cache"
 
 
 def read_cache(path, tag: str) -> dict:
@@ -26,12 +39,49 @@ def read_cache(path, tag: str) -> dict:
     problem's); a figure or constraint stored under a name its output had before is read under the
     name now, with a ``DeprecationWarning``.
 
+    Parameters
+    ----------
+    path : str, os.PathLike or None
+        The cache file, a log (:class:`DesignCache`) or the document of the format before it.
+    tag : str
+        The problem's fingerprint.
+
+    Returns
+    -------
+    dict
+        Each design's record by its id, in the order first written.
+
     Raises
     ------
     ValueError
-        A file that is not readable JSON, in one line.
+        A file that is neither a log nor a JSON document, or a log with a line not readable JSON
+        before its last, in one line naming the file.
     """
-    return {r["id"]: _current(r) for r in _document(path, tag).get("evaluations", [])}
+    return DesignCache(path, tag).designs
+
+
+def read_gradients(path, tag: str) -> dict:
+    """The designs' gradients a cache file holds for the problem ``tag``, by ``(id, kind)`` (``kind``
+    ``"default"`` at the default step, ``"refined"`` the step refined where it meets a border), each
+    ``{"objective": list, "constraints": list of lists}`` (``{}``: none, no file, or another problem's).
+
+    Parameters
+    ----------
+    path : str, os.PathLike or None
+        The cache file (:func:`read_cache`'s).
+    tag : str
+        The problem's fingerprint.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ValueError
+        :func:`read_cache`'s.
+    """
+    return DesignCache(path, tag).gradients
 
 
 def _current(record: dict) -> dict:
@@ -46,38 +96,157 @@ def _current(record: dict) -> dict:
     return record
 
 
-def read_gradients(path, tag: str) -> dict:
-    """The designs' gradients a cache file holds for the problem ``tag``, by ``(id, kind)`` (``kind``
-    ``"default"`` at the default step, ``"refined"`` the step refined where it meets a border), each
-    ``{"objective": list, "constraints": list of lists}`` (``{}``: none, no file, or another problem's).
+def _unreadable(path, what: str, exc: Exception) -> ValueError:
+    return ValueError(f"cache {str(path)!r} {what}: {exc}; delete the file (or give another) to start the "
+                      f"search afresh")
+
+
+class DesignCache:
+    """A problem's cache file: the designs and gradients it holds, read on opening, and a log each
+    new one is appended to (module docstring).
+
+    Parameters
+    ----------
+    path : str, os.PathLike or None
+        The file (``None``: nothing read or written). A log of another problem, or a file in the
+        format before the log, is replaced, atomically, on the first write: by an empty log of this
+        problem, by a log of what the old file held of this problem.
+    tag : str
+        The problem's fingerprint (the config, the variables and bounds, the objective, the
+        constraints).
+
+    Attributes
+    ----------
+    designs : dict
+        The designs' records by id, those read and those added, in the order first written.
+    gradients : dict
+        The gradients by ``(id, kind)``, each ``{"objective", "constraints", "id", "kind"}``.
 
     Raises
     ------
     ValueError
-        A file that is not readable JSON, in one line.
+        A file that is neither a log nor a JSON document, or a log with a line not readable JSON
+        before its last, in one line naming the file and what to do.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "cache.json"
+    >>> cache = DesignCache(path, "p")
+    >>> cache.add({"id": "a", "ok": True})
+    >>> cache.add_gradient("a", "default", {"objective": [1.5], "constraints": [[0.25]]})
+    >>> cache.close()
+    >>> again = DesignCache(path, "p")
+    >>> list(again.designs), again.gradients[("a", "default")]["objective"], DesignCache(path, "q").designs
+    (['a'], [1.5], {})
     """
-    return {(g["id"], g["kind"]): g for g in _document(path, tag).get("gradients", [])}
+
+    def __init__(self, path, tag: str) -> None:
+        self.path = None if path is None else Path(path)
+        self.tag = tag
+        self.designs: dict = {}
+        self.gradients: dict = {}
+        self._keep = 0  # the bytes of the file's whole lines, where it is this problem's log
+        self._log = None  # the file open for appending
+        self._changed: dict = {}  # records changed since written, by id: written with the next line
+        if self.path is not None and self.path.exists():
+            self._read()
+
+    def _read(self) -> None:
+        try:
+            data = self.path.read_bytes()
+        except OSError as exc:
+            raise _unreadable(self.path, "cannot be read", exc) from exc
+        end = data.rfind(b"\n") + 1  # (the bytes after the last end of line: a line cut short)
+        first = data[:data.find(b"\n") + 1] if end else b""
+        try:
+            head = json.loads(first) if first.startswith(b'{"' + LOG_FORMAT.encode()) else None
+        except ValueError:
+            head = None
+        if head is None and not data.strip():  # (an empty file: nothing kept)
+            return
+        if head is None:  # the format before the log: one JSON document
+            try:
+                doc = json.loads(data)
+            except ValueError as exc:
+                raise _unreadable(self.path, "is neither a cache log nor a readable JSON file", exc) from exc
+            if isinstance(doc, dict) and doc.get("problem") == self.tag:
+                for r in doc.get("evaluations", []):
+                    self.designs[r["id"]] = _current(r)
+                self.gradients.update({(g["id"], g["kind"]): g for g in doc.get("gradients", [])})
+            return
+        if head.get("problem") != self.tag:
+            return
+        for n, line in enumerate(data[len(first):end].splitlines(), start=2):
+            try:
+                entry = json.loads(line)
+            except ValueError as exc:
+                raise _unreadable(self.path, f"line {n} is not readable JSON", exc) from exc
+            if "design" in entry:
+                self.designs[entry["design"]["id"]] = _current(entry["design"])
+            else:
+                g = entry["gradient"]
+                self.gradients[(g["id"], g["kind"])] = g
+        self._keep = end
+
+    def add(self, record: dict) -> None:
+        """Keep a design's record (by its ``id``) and append it to the file."""
+        self.designs[record["id"]] = record
+        self._changed.pop(record["id"], None)
+        self._write({"design": record})
+
+    def add_gradient(self, rid: str, kind: str, gradient: dict) -> None:
+        """Keep a design's gradients of kind ``kind`` (``{"objective", "constraints"}``) and append
+        them to the file."""
+        self.gradients[(rid, kind)] = g = dict(gradient, id=rid, kind=kind)
+        self._write({"gradient": g})
+
+    def changed(self, record: dict) -> None:
+        """A kept design's record changed in place: written again with the next line written."""
+        if self.path is not None:
+            self._changed[record["id"]] = record
+
+    def rewrite(self) -> None:
+        """The file written anew, atomically (a file beside it, then renamed): the problem, each
+        design once, the gradients."""
+        if self.path is None:
+            return
+        self.close()
+        self._changed.clear()
+        tmp = self.path.with_suffix(self.path.suffix + ".tmp")
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(_line({LOG_FORMAT: 2, "problem": self.tag}))
+            f.writelines(_line({"design": r}) for r in self.designs.values())
+            f.writelines(_line({"gradient": g}) for g in self.gradients.values())
+        os.replace(tmp, self.path)
+        self._keep = self.path.stat().st_size
+
+    def _write(self, entry: dict) -> None:
+        if self.path is None:
+            return
+        if self._log is None:
+            if not self._keep:  # no log of this problem yet: one of what was read and this entry
+                self.rewrite()
+                return
+            self._log = open(self.path, "r+b")  # noqa: SIM115  (open until close())
+            self._log.truncate(self._keep)  # (a line cut short by a stop)
+            self._log.seek(self._keep)
+        text = "".join([*(_line({"design": r}) for r in self._changed.values()), _line(entry)])
+        self._changed.clear()
+        data = text.encode()
+        self._log.write(data)
+        self._log.flush()
+        self._keep += len(data)
+
+    def close(self) -> None:
+        """Close the file (a later write opens it again)."""
+        if self._log is not None:
+            self._log.close()
+            self._log = None
 
 
-def _document(path, tag: str) -> dict:
-    """The cache file's document where it holds the problem ``tag`` (``{}``: no file, or another
-    problem's); a file that is not readable JSON raises a ``ValueError`` in one line."""
-    if path is None or not Path(path).exists():
-        return {}
-    try:
-        doc = json.loads(Path(path).read_text())
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"cache {str(path)!r} is not a readable JSON file: {exc}") from exc
-    return doc if isinstance(doc, dict) and doc.get("problem") == tag else {}
-
-
-def write_cache(path: Path, tag: str, store: dict, gradients: dict | None = None) -> None:
-    """Write the designs and the gradients computed of them (``{(id, kind): {"objective",
-    "constraints"}}``; a file beside it, then renamed: a stop mid-write leaves the last one)."""
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    kept = [dict(g, id=rid, kind=kind) for (rid, kind), g in (gradients or {}).items()]
-    tmp.write_text(dumps({"problem": tag, "evaluations": list(store.values()), "gradients": kept}))
-    tmp.replace(path)
+def _line(entry: dict) -> str:
+    return json.dumps(_plain(entry), allow_nan=False, separators=(",", ":")) + "\n"
 
 
 def _plain(obj):

@@ -53,7 +53,6 @@ import hashlib
 import json
 import math
 import time
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -65,7 +64,7 @@ from .drifter import Drifter
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_border import EXISTENCE, BorderScore, border_score, existence_gradient, existence_margin
-from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
+from .optimize_cache import DesignCache, OrbitChain
 from .optimize_failures import classify_listed, failed_record
 from .optimize_integers import integer_search
 from .optimize_multistart import check_multistart, multistart_search
@@ -161,10 +160,12 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         re-evaluation); for SLSQP the most iterations, each its line search's designs (one where its
         full step is accepted; 252 designs for 30 on the example rock drifter).
     cache : str or os.PathLike, optional
-        A JSON file of the designs evaluated: read first (a run stopped part-way resumes from it, the
-        search visiting the same designs), written after every evaluation. Keyed by the problem (the
-        config, the variables and bounds, the objective, the constraints): a cache of another
-        problem is not reused, and is overwritten. A resumed run visits the designs of a run never
+        A file of the designs evaluated: read first (a run stopped part-way resumes from it, the
+        search visiting the same designs), each design appended to it as one JSON line when it is
+        evaluated (:class:`~impactbar.physical.optimize_cache.DesignCache`; a file of the format
+        before, one JSON document, is read too). Keyed by the problem (the config, the variables and
+        bounds, the objective, the constraints): a cache of another problem is not reused, and is
+        overwritten. A resumed run visits the designs of a run never
         stopped, with the same figures to the bit: a design read from it carries its figures, not
         its orbit, and where a new design continues from one, that orbit is solved again as the first
         run solved it, along the designs' recorded guesses
@@ -197,9 +198,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         Where a population's or a sample's designs are evaluated (those two methods only):
         ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
         (started and closed by the call), or a client's cluster; the same records either way. The
-        multistart's polish computes its gradients' columns there too (two steps of
-        :func:`~impactbar.physical.optimize_problem._refined_gradient` a round) on more than one
-        worker or a client's cluster: the same gradients as in this process, to the bit.
+        multistart's polish and its certificate compute their gradients' columns there too (two
+        steps of :func:`~impactbar.physical.optimize_problem._refined_gradient` a round) on more
+        than one worker or a client's cluster: the same gradients as in this process, to the bit.
     popsize, seed : int
         The population per variable (at least 2) and the random seed (at least 0) of
         ``method="differential_evolution"`` (``"multistart"``: the sample's seed).
@@ -347,9 +348,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective,
                        dict(limits, impact_velocity=V) if ideal else limits)
 
-    cache_path = Path(cache) if cache is not None else None
-    store = read_cache(cache_path, tag)
-    stored_gradients = read_gradients(cache_path, tag)  # (a run started again: none computed twice)
+    log = DesignCache(cache, tag)  # (a run started again: no design, no gradient computed twice)
+    store, stored_gradients = log.designs, log.gradients
     n_cached = 0
     near: list[_Near] = []  # the designs with an orbit: their scaled variables, ids
     history: list[dict] = []
@@ -407,11 +407,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             rec = failed_record(exc, time.perf_counter() - t0, None if ideal else drifter, classify=False)
         rec.update(id=rid, values=values, changes=changes)
-        store[rid] = rec
+        log.add(rec)  # (store[rid])
         history.append(rec)
         counter["new"] += 1
-        if cache_path is not None:
-            write_cache(cache_path, tag, store, stored_gradients)
         bar.design(rec["seconds"])
         return rec
 
@@ -419,8 +417,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     bar = DesignProgress(None if method == "slsqp" else max_evaluations, progress)
     start = np.array([spec[k]["start"] for k in keys])
     u0 = (start - lo) / span
-    cluster = contextlib.ExitStack()  # (the multistart's workers, open through its polish)
-    spread = None  # the multistart's map on its workers: the polish's gradients' columns computed there
+    cluster = contextlib.ExitStack()  # (the multistart's workers, open through its polish and certificate)
+    spread = None  # the multistart's map on its workers: the polish's, the certificate's gradient columns
     try:
         first = check_start(evaluate(u0), any_start)
         ref = abs(first["objectives"][fkey]) or 1.0
@@ -447,6 +445,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     "constraints"].values()], existence_margin(success, scale), *grad, d_exists, radius)
                 rec["border"] = {"nearest": nid, **s.as_record(),
                                  **({} if which == "default" else {"gradient": which})}
+                log.changed(rec)  # (written again with the cache's next line)
             return rec.get("border")
 
         def exists_model(at, which: str):
@@ -492,9 +491,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
                     gradients[key] = compute(cfg, folder, rec, orbit, spec, limits, fkey, span)
                     counter["gradients"] += 1
-                    stored_gradients[key] = gradients[key]._asdict()
-                    if cache_path is not None:
-                        write_cache(cache_path, tag, store, stored_gradients)
+                    log.add_gradient(*key, gradients[key]._asdict())
             return gradients[key]
 
         def model_gradient(u, which: str = "default"):
@@ -568,52 +565,58 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                            options={"ftol": tol ** 3, "maxiter": max_evaluations})
         message = str(res.message) + ("" if polished is None else f"; {polished.summary}")
         bar.finish()
+    except BaseException:
+        cluster.close()
+        raise
     finally:
         bar.close()
-        cluster.close()
-    # what the drill does at the designs without a one-impact orbit that the result lists (the search
-    # classified none: the motion from rest costs several evaluations)
-    if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)) and cache_path:
-        write_cache(cache_path, tag, store, stored_gradients)
-    # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache; the best
-    # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
-    # some 1e-9 from the fresh one's, a design at an active limit on its other side)
-    fresh = {}
-    ranked = sorted((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey],
-                    reverse=True)
-    if not ranked:  # (a start="any" search that found no feasible design: the least infeasible reported)
-        ranked = [max((r for r in history if r.get("ok")), key=least_margin)]
-        message += (f"; no feasible design found: the design reported is the least infeasible (its "
-                    f"smallest scaled margin {least_margin(ranked[0]):.3g})")
-    for name, rec in [("baseline", first)] + [("optimum", r) for r in ranked]:
-        if "optimum" in fresh and fresh["optimum"]["feasible"]:
-            break
-        best = rec
-        out = fresh_record(rec["changes"], values=rec["values"], changes=rec["changes"])
-        out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
-                                        for k in rec["objectives"] if rec["objectives"][k] != 0.0)
-        if name == "optimum" and "optimum" in fresh:
-            message += "; the best design's fresh orbit missed a constraint, the next best kept"
-        fresh[name] = out
-    message += _better_missed(history, best, fkey)
-    # the polish's design reported: resolved by SLSQP (no step of COBYLA's), its stop SLSQP's
-    by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
+        log.close()
+    with cluster:  # (the multistart's workers, open through the certificate: its gradient's columns there)
+        # what the drill does at the designs without a one-impact orbit that the result lists (the search
+        # classified none: the motion from rest costs several evaluations)
+        if classify_listed(history, lambda r: build(with_values(cfg, r["changes"]), folder)):
+            log.rewrite()  # (their records changed: the file written anew, once)
+        # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache; the best
+        # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
+        # some 1e-9 from the fresh one's, a design at an active limit on its other side)
+        fresh = {}
+        ranked = sorted((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey],
+                        reverse=True)
+        if not ranked:  # (a start="any" search that found no feasible design: the least infeasible reported)
+            ranked = [max((r for r in history if r.get("ok")), key=least_margin)]
+            message += (f"; no feasible design found: the design reported is the least infeasible (its "
+                        f"smallest scaled margin {least_margin(ranked[0]):.3g})")
+        for name, rec in [("baseline", first)] + [("optimum", r) for r in ranked]:
+            if "optimum" in fresh and fresh["optimum"]["feasible"]:
+                break
+            best = rec
+            out = fresh_record(rec["changes"], values=rec["values"], changes=rec["changes"])
+            out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
+                                            for k in rec["objectives"] if rec["objectives"][k] != 0.0)
+            if name == "optimum" and "optimum" in fresh:
+                message += "; the best design's fresh orbit missed a constraint, the next best kept"
+            fresh[name] = out
+        message += _better_missed(history, best, fkey)
+        # the polish's design reported: resolved by SLSQP (no step of COBYLA's), its stop SLSQP's
+        by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
 
-    def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
-        _, record, _ = fresh_design(design_of(v).changes)
-        return record
+        def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
+            _, record, _ = fresh_design(design_of(v).changes)
+            return record
 
-    try:  # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)
-        certificate = certify_search(fresh["optimum"], history, keys, (lo, span),
-                                     polished if by_polish else res, tol, fkey,
-                                     fresh_of if ideal or kind == "drifter" else None,
-                                     lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec,
-                                                               limits, fkey, span),
-                                     tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
-    except ValueError as exc:
-        if kind == "circuit":
-            raise
-        certificate, message = None, message + f"; no certificate: a neighbour has no operating point ({exc})"
+        # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)
+        try:
+            certificate = certify_search(fresh["optimum"], history, keys, (lo, span),
+                                         polished if by_polish else res, tol, fkey,
+                                         fresh_of if ideal or kind == "drifter" else None,
+                                         lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec,
+                                                                   limits, fkey, span, run=spread),
+                                         tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
+        except ValueError as exc:
+            if kind == "circuit":
+                raise
+            certificate = None
+            message += f"; no certificate: a neighbour has no operating point ({exc})"
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
                                 for k in keys},
