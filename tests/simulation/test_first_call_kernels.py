@@ -146,6 +146,80 @@ def test_the_lattice_blows_helpers_are_compiled_into_its_loop_and_numbas_overloa
     assert out["efficiency"] == pytest.approx(ref.efficiency, rel=1e-10)
 
 
+#: exact blows, each record's every float hashed: ``digests`` (the README's, three rods of
+#: ``bench_exact_blow.py``, a bit with mass, then Lundberg's 40-long rod, whose twin runs past its budget)
+_EXACT_BLOWS = """
+import dataclasses, hashlib
+import numpy as np
+from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
+
+
+def digest(x, h):
+    if dataclasses.is_dataclass(x):
+        for f in dataclasses.fields(x):
+            if f.name == "_hist":  # (the pool's pieces and terms written, not its capacity's rest)
+                scale, (PF, PI, TK, TC, *rest), *more = x._hist
+                n, t = x.pieces, x.diagnostics["terms"]
+                digest((scale, PF[:n], PI[:n], TK[:t], TC[:t], rest, more), h)
+            else:
+                digest(getattr(x, f.name), h)
+    elif isinstance(x, dict):
+        for k in sorted(x, key=str):
+            digest(x[k], h)
+    elif isinstance(x, (list, tuple)):
+        for y in x:
+            digest(y, h)
+    elif isinstance(x, np.ndarray) and x.dtype != object:
+        h.update(np.ascontiguousarray(x).tobytes())
+    elif isinstance(x, (float, int, complex, np.number)):
+        h.update(np.asarray(x).tobytes())
+    elif isinstance(x, str):
+        h.update(x.encode())
+    return h
+
+
+def blow(segments, k, k_u, s=1.0, bit_mass=0.0, **kw):
+    law = RodRock(segments=[RodSegment(a, z) for a, z in segments], rock=BilinearRock(k, k_u),
+                  bit_mass=bit_mass)
+    out = single_blow(BarModel(s=s, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, **kw)
+    return digest(out, hashlib.sha256()).hexdigest()
+
+
+digests = [blow([(40.0, 1.0)], 2.5, 25.0, s=2.0, t_max=39.0), blow([(1.0, 1.0)], 1.0, 5.0),
+           blow([(1.0, 1.0), (0.5, 0.5), (2.0, 1.0)], 0.5, 1.0),
+           blow([(2.0, 1.0), (1.0, 0.6)], 1.0, 5.0, bit_mass=0.3)]
+"""
+_LUNDBERG = """
+digests.append(blow([(40.0, 1.0)], 2.5, 2.5e9, s=2.0))
+"""
+
+
+@pytest.mark.slow
+def test_the_first_exact_blows_run_their_twin_to_the_machine_codes_bits(tmp_path):
+    """A process's first exact blows (the README's, three rods of ``bench_exact_blow.py`` with a bit
+    with mass among them), with an empty numba cache, compile none of the exact blow's kernels (75
+    compiles, some 17 s of CPU on 8a4f9cae): they run the blow's interpreted twin, whose records are
+    the machine code's to the bit (every float of each record hashed, against the machine code of
+    this process). Lundberg's 40-long rod after them runs its twin past its budget (1 s of CPU): the
+    machine code takes the blow over from its start (compiled then), the same bits."""
+    from impactbar.dynamics import _tiers
+
+    out = _first_call(_COUNT + _EXACT_BLOWS + "first = list(compiled)" + _LUNDBERG
+                      + "print(json.dumps({'first': first, 'compiled': compiled, 'digests': digests}))",
+                      tmp_path)
+    exact = [k for k in out["first"] if k.startswith("impactbar.laws.rodrock._exact")]
+    assert exact == []  # (on 8a4f9cae: every one of the blow's 66 kernels)
+    assert "impactbar.laws.rodrock._exactloop.run" in out["compiled"]  # (the twin past its budget)
+    eager = _tiers._PROCESS.eager
+    _tiers._PROCESS.eager = True  # here: the machine code
+    here = {}
+    try:
+        exec(_EXACT_BLOWS + _LUNDBERG, here)
+    finally:
+        _tiers._PROCESS.eager = eager
+    assert out["digests"] == here["digests"]
+
+
 _CIRCUIT_HELPERS = _COUNT + """
 from impactbar.drives.circuit import _sundials
 if _sundials.bind():
