@@ -67,24 +67,62 @@ def deadline(at: float) -> float:
 
 
 def _checkpoint():
-    """Raise :class:`OverBudget` once this thread is past its :func:`deadline`."""
+    """A twin's checkpoint (:func:`checkpoint`): nothing before this thread's :func:`deadline`.
+
+    Raises
+    ------
+    OverBudget
+        Once ``time.process_time()`` is past the deadline.
+    """
     if time.process_time() > getattr(_LOCAL, "at", math.inf):
         raise OverBudget("the twin ran past its CPU budget")
 
 
 
 def _quot(a, b):
-    """``a / b`` rounded as numba's machine code: for a complex operand CPython's algorithm
-    (``complex.__truediv__`` on Python complex numbers, which numba compiles too), else IEEE's
-    quotient."""
+    """``a / b`` as numba's machine code computes it (:func:`quot`).
+
+    Parameters
+    ----------
+    a, b : int, float or complex
+        Scalars (numpy's or Python's), as the kernel divides them.
+
+    Returns
+    -------
+    float or complex
+        For a complex operand CPython's quotient of ``complex(a)`` by ``complex(b)`` (the algorithm
+        numba compiles), else IEEE's quotient.
+
+    Raises
+    ------
+    ZeroDivisionError
+        Where ``b`` is zero, as the machine code raises.
+    """
     if isinstance(a, complex) or isinstance(b, complex):  # (numpy's complex128 is a complex)
         return complex(a) / complex(b)
     return a / b
 
 
 def _ipow(x, n):
-    """``x ** n`` for a float ``x`` and an integer ``n``, rounded as numba's machine code: repeated
-    squaring (numba's ``int_power``; the C library's ``pow`` beyond ``|n| = 65536``)."""
+    """``x ** n`` as numba's machine code computes it (:func:`ipow`).
+
+    Parameters
+    ----------
+    x : float
+        The base.
+    n : int
+        The exponent.
+
+    Returns
+    -------
+    float
+        numba's ``int_power``: repeated squaring (the C library's ``pow`` beyond ``|n| = 65536``).
+
+    Raises
+    ------
+    ZeroDivisionError
+        Where ``x`` is zero and ``n`` negative, as the machine code raises.
+    """
     r = 1.0
     a = float(x)
     e = -n if n < 0 else n
@@ -96,6 +134,13 @@ def _ipow(x, n):
         e >>= 1
         a *= a
     return 1.0 / r if n < 0 else r
+
+
+def _named(out, python):
+    """The intrinsic ``out``, its Python form ``python`` (and that one's docstring)."""
+    out._impactbar_python = python
+    out.__doc__ = python.__doc__
+    return out
 
 
 def _operator_intrinsic(op, python, name):
@@ -117,9 +162,7 @@ def _operator_intrinsic(op, python, name):
         return sig.return_type(a, b), codegen
 
     typer.__name__ = typer.__qualname__ = name
-    out = intrinsic(typer)
-    out._impactbar_python = python
-    return out
+    return _named(intrinsic(typer), python)
 
 
 def _nothing_intrinsic(python, name):
@@ -135,9 +178,7 @@ def _nothing_intrinsic(python, name):
         return types.none(), codegen
 
     typer.__name__ = typer.__qualname__ = name
-    out = intrinsic(typer)
-    out._impactbar_python = python
-    return out
+    return _named(intrinsic(typer), python)
 
 
 def python_form(obj):

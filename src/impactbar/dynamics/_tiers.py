@@ -13,7 +13,9 @@ code for).
 
 The twin computes what the machine code computes: IEEE double arithmetic in the same order, the C
 library's functions (``math.hypot`` as numba calls it, the C library's ``hypot``), the same
-integer and array semantics for what the kernels do; the tests hold the two to the bit. Kernels
+integer and array semantics for what the kernels do, and a complex quotient or a float's integer
+power as numba rounds them where the kernel writes it with :mod:`impactbar._shared.twinops` (numpy's
+scalars round those two differently); the tests hold the two to the bit. Kernels
 compiled with fast math (the Aberth sweeps) and those that reach one are never interpreted: fast
 math reorders arithmetic, so their twins could round differently. (A kernel compiled with
 ``error_model="numpy"`` gives inf where its twin would raise ``ZeroDivisionError``; none of
