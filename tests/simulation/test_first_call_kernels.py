@@ -84,7 +84,8 @@ def test_the_first_exact_blow_compiles_each_kernel_once_and_samples_its_record_i
     exponents), with an empty numba cache: each of impactbar's kernels compiles for one signature,
     and the record's history evaluators (``eval_histories``, ``eval_bit`` and their callee
     ``_eval_into``, some 1 s of compiling) not at all: their interpreted twins sample the histories,
-    to the machine code's bits (compared here with the machine code of this process)."""
+    to the machine code's bits (compared here with the machine code of this process). (Since the
+    blow's run has its twin too, none of the blow's kernels compiles there: a test below.)"""
     from impactbar.dynamics import _tiers
 
     out = _first_call(_COUNT + _BLOWS + "print(json.dumps({'compiled': compiled, 'records': records}))",
