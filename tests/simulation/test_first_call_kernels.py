@@ -3,6 +3,7 @@ empty numba cache: each compile is CPU time a designer waits for once (``bench_f
 times them). A kernel that compiles for a second signature (the same arrays with another layout, a
 literal flag) is a compile no result needs."""
 
+import functools
 import json
 import os
 import subprocess
@@ -83,7 +84,8 @@ def test_the_first_exact_blow_compiles_each_kernel_once_and_samples_its_record_i
     exponents), with an empty numba cache: each of impactbar's kernels compiles for one signature,
     and the record's history evaluators (``eval_histories``, ``eval_bit`` and their callee
     ``_eval_into``, some 1 s of compiling) not at all: their interpreted twins sample the histories,
-    to the machine code's bits (compared here with the machine code of this process)."""
+    to the machine code's bits (compared here with the machine code of this process). (Since the
+    blow's run has its twin too, none of the blow's kernels compiles there: a test below.)"""
     from impactbar.dynamics import _tiers
 
     out = _first_call(_COUNT + _BLOWS + "print(json.dumps({'compiled': compiled, 'records': records}))",
@@ -144,6 +146,130 @@ def test_the_lattice_blows_helpers_are_compiled_into_its_loop_and_numbas_overloa
         ref = rod_rock_blow(2.0, 1.0, [40.0], [1.0], [1.0], 2.5, 25.0, 0.2, 0.0, t_max=39.0)
     np.testing.assert_allclose(out["forces"], ref.bit_forces, rtol=1e-10, atol=1e-12 * max(ref.bit_forces))
     assert out["efficiency"] == pytest.approx(ref.efficiency, rel=1e-10)
+
+
+#: exact blows, each record's every float hashed: ``digests`` (the README's, three rods of
+#: ``bench_exact_blow.py``, a bit with mass, then Lundberg's 40-long rod, whose twin runs past its budget)
+_EXACT_BLOWS = """
+import dataclasses, hashlib
+import numpy as np
+from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
+
+
+def digest(x, h):
+    if dataclasses.is_dataclass(x):
+        for f in dataclasses.fields(x):
+            if f.name == "_hist":  # (the pool's pieces and terms written, not its capacity's rest)
+                scale, (PF, PI, TK, TC, *rest), *more = x._hist
+                n, t = x.pieces, x.diagnostics["terms"]
+                digest((scale, PF[:n], PI[:n], TK[:t], TC[:t], rest, more), h)
+            else:
+                digest(getattr(x, f.name), h)
+    elif isinstance(x, dict):
+        for k in sorted(x, key=str):
+            digest(x[k], h)
+    elif isinstance(x, (list, tuple)):
+        for y in x:
+            digest(y, h)
+    elif isinstance(x, np.ndarray) and x.dtype != object:
+        h.update(np.ascontiguousarray(x).tobytes())
+    elif isinstance(x, (float, int, complex, np.number)):
+        h.update(np.asarray(x).tobytes())
+    elif isinstance(x, str):
+        h.update(x.encode())
+    return h
+
+
+def blow(segments, k, k_u, s=1.0, bit_mass=0.0, **kw):
+    law = RodRock(segments=[RodSegment(a, z) for a, z in segments], rock=BilinearRock(k, k_u),
+                  bit_mass=bit_mass)
+    out = single_blow(BarModel(s=s, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, **kw)
+    return digest(out, hashlib.sha256()).hexdigest()
+
+
+digests = [blow([(40.0, 1.0)], 2.5, 25.0, s=2.0, t_max=39.0), blow([(1.0, 1.0)], 1.0, 5.0),
+           blow([(1.0, 1.0), (0.5, 0.5), (2.0, 1.0)], 0.5, 1.0),
+           blow([(2.0, 1.0), (1.0, 0.6)], 1.0, 5.0, bit_mass=0.3)]
+"""
+_LUNDBERG = """
+digests.append(blow([(40.0, 1.0)], 2.5, 2.5e9, s=2.0))
+"""
+
+
+@pytest.mark.slow
+def test_the_first_exact_blows_run_their_twin_to_the_machine_codes_bits(tmp_path):
+    """A process's first exact blows (the README's, three rods of ``bench_exact_blow.py`` with a bit
+    with mass among them), with an empty numba cache, compile none of the exact blow's kernels (75
+    compiles, some 17 s of CPU on 8a4f9cae): they run the blow's interpreted twin, whose records are
+    the machine code's to the bit (every float of each record hashed, against the machine code of
+    this process). Lundberg's 40-long rod after them runs its twin past its budget (1 s of CPU): the
+    machine code takes the blow over from its start (compiled then), the same bits."""
+    from impactbar.dynamics import _tiers
+
+    out = _first_call(_COUNT + _EXACT_BLOWS + "first = list(compiled)" + _LUNDBERG
+                      + "print(json.dumps({'first': first, 'compiled': compiled, 'digests': digests}))",
+                      tmp_path)
+    exact = [k for k in out["first"] if k.startswith("impactbar.laws.rodrock._exact")]
+    assert exact == []  # (on 8a4f9cae: every one of the blow's 66 kernels)
+    assert "impactbar.laws.rodrock._exactloop.run" in out["compiled"]  # (the twin past its budget)
+    eager = _tiers._PROCESS.eager
+    _tiers._PROCESS.eager = True  # here: the machine code
+    here = {}
+    try:
+        exec(_EXACT_BLOWS + _LUNDBERG, here)
+    finally:
+        _tiers._PROCESS.eager = eager
+    assert out["digests"] == here["digests"]
+
+
+@pytest.mark.slow
+def test_the_exact_blows_twin_gives_the_machine_codes_bits_on_a_seeded_sample_of_rods():
+    """The exact blow's twin against its machine code on 200 blows drawn over the exact method's
+    parameters (1 to 3 segments of lengths 0.3 to 4 and impedances 0.3 to 2, the piston's impedance
+    0.5 to 3, the rock's k 0.1 to 10 and gamma 1.6 to 100, a third with a bit's mass, the impact
+    velocity 0.3 to 3, to a t_max of 1 to 6): every float of each record the same (8a4f9cae's twin,
+    numpy's complex quotients and powers in the blow, differed on 64 of 100 blows of such a sample,
+    36 of them in the record's forces or energies, the rest in the pool's pieces)."""
+    from impactbar.dynamics import _tiers
+    from impactbar.laws.rodrock import _exactloop as K
+
+    ns: dict = {}
+    exec(_EXACT_BLOWS.split("digests = [")[0], ns)
+    machine, rng = K.run, np.random.default_rng(2026)
+    eager = _tiers._PROCESS.eager
+    _tiers._PROCESS.eager = True  # (run_kernel takes K.run as it is)
+    twins = []
+
+    def twin(*a):
+        twins.append(a)
+        return _tiers.twin(machine)(*a)
+
+    try:
+        for _ in range(200):
+            n = rng.choice([1, 1, 2, 2, 3])
+            segments = [(rng.uniform(0.3, 4.0), rng.uniform(0.3, 2.0)) for _ in range(n)]
+            k = 10.0 ** rng.uniform(-1.0, 1.0)
+            args = (segments, k, k * 10.0 ** rng.uniform(0.2, 2.0))
+            kw = dict(s=rng.uniform(0.5, 3.0), bit_mass=rng.choice([0.0, 0.0, rng.uniform(0.05, 1.0)]),
+                      t_max=rng.uniform(1.0, 6.0))
+            v = rng.uniform(0.3, 3.0)
+            ns["single_blow"] = functools.partial(_impact_at, v)
+            K.run, twins[:] = twin, []
+            try:
+                with np.errstate(all="raise", under="ignore"):
+                    interpreted = ns["blow"](*args, **kw)
+            finally:
+                K.run = machine
+            assert twins and ns["blow"](*args, **kw) == interpreted, (args, kw, v)
+    finally:
+        _tiers._PROCESS.eager = eager
+
+
+def _impact_at(v, model, _velocity, **kw):
+    """``single_blow`` at the impact velocity ``v``."""
+    from impactbar import single_blow
+
+    return single_blow(model, v, **kw)
 
 
 _CIRCUIT_HELPERS = _COUNT + """

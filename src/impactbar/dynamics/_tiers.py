@@ -13,7 +13,9 @@ code for).
 
 The twin computes what the machine code computes: IEEE double arithmetic in the same order, the C
 library's functions (``math.hypot`` as numba calls it, the C library's ``hypot``), the same
-integer and array semantics for what the kernels do; the tests hold the two to the bit. Kernels
+integer and array semantics for what the kernels do, and a complex quotient or a float's integer
+power as numba rounds them where the kernel writes it with :mod:`impactbar._shared.twinops` (numpy's
+scalars round those two differently); the tests hold the two to the bit. Kernels
 compiled with fast math (the Aberth sweeps) and those that reach one are never interpreted: fast
 math reorders arithmetic, so their twins could round differently. (A kernel compiled with
 ``error_model="numpy"`` gives inf where its twin would raise ``ZeroDivisionError``; none of
@@ -56,6 +58,9 @@ import time
 import types
 
 import numpy as np
+
+from .._shared import twinops
+from .._shared.twinops import python_form
 
 #: CPU seconds a process may spend in interpreted twins; past them it compiles what it still needs
 BUDGET = 1.0
@@ -184,27 +189,33 @@ def _compile_for_args(self, *args, **kws):
 class _Twin:
     """A call of a kernel's twin, which adds its CPU time to the process's budget. Where the twin
     meets what Python refuses and machine code lets pass (an overflow to inf, a square root of a
-    negative rounding error, any floating-point error numpy would raise), the arguments are put
-    back as they came and the machine code runs the call instead (numba compiles it here)."""
+    negative rounding error, any floating-point error numpy would raise), or runs past what is left
+    of its budget (at a kernel's :func:`~impactbar._shared.twinops.checkpoint`), the arguments are
+    put back as they came and the machine code runs the call instead (numba compiles it here)."""
 
-    __slots__ = ("disp", "first", "scratch")
+    __slots__ = ("disp", "first", "scratch", "budget")
 
-    def __init__(self, disp, first=False, scratch=()):
+    def __init__(self, disp, first=False, scratch=(), budget=BUDGET):
         self.disp, self.first = disp, first  # first: its time counts to interpreted_first's budget
         self.scratch = scratch  # the positions of arguments whose arrays are not put back
+        self.budget = budget
 
     def __call__(self, *args):
-        arrays = _arrays(tuple(a for i, a in enumerate(args) if i not in self.scratch), [])
+        arrays = [a for a in _arrays(tuple(a for i, a in enumerate(args) if i not in self.scratch), [])
+                  if a.flags.writeable]  # (a read-only array, such as the exact blow's binomials, stays)
         saved = [a.copy() for a in arrays]
         t = time.process_time()
+        left = self.budget - (_FIRST.get(self.disp, 0.0) if self.first else _PROCESS.spent)
+        before = twinops.deadline(t + max(left, 0.0))
         try:
             with np.errstate(all="raise", under="ignore"):
                 return twin(self.disp)(*args)
-        except (ArithmeticError, ValueError):
+        except (ArithmeticError, ValueError, twinops.OverBudget):
             for a, b in zip(arrays, saved, strict=True):
                 a[...] = b
             return _numba(self.disp, args)(*args)
         finally:
+            twinops.deadline(before)
             with _LOCK:
                 if self.first:
                     _FIRST[self.disp] = _FIRST.get(self.disp, 0.0) + time.process_time() - t
@@ -216,14 +227,19 @@ def interpreted_first(disp, budget: float = FIRST_BUDGET, scratch: tuple = ()):
     """What runs the next call of the kernel ``disp``, whatever the tier: its machine code where
     numba holds it, in this process or in its cache, or once the process has spent ``budget`` CPU
     seconds in its twin (numba compiles it then); else its twin, which gives the machine code's bits
-for the real arithmetic the kernels it serves do (not for every kernel: numpy divides a complex
-scalar by its reciprocal's product, numba as CPython does, an ulp apart in some 40 % of quotients).
+(for a complex quotient or a float's integer power only where the kernel writes it as
+:mod:`impactbar._shared.twinops`' ``quot`` or ``ipow``: numpy's scalars round those differently).
+A twin that runs past what is left of ``budget`` at one of the kernel's
+:func:`~impactbar._shared.twinops.checkpoint` calls is abandoned there: the machine code runs the
+call from its arguments as they came.
 
     For a kernel whose compile costs far more than the calls of a short computation: the
     admissibility search (theory §5) compiles in some 5 to 9 s of CPU time (with its callees,
     alone in the process on a 2-core machine) and ``impactbar paper`` calls it 41 times, 0.07 s of
     CPU time in its twin; a long computation loses at most ``budget`` seconds (and one call) before
-    it takes the machine code. ``impactbar warmup`` (:func:`disable`) compiles it on its first call.
+    it takes the machine code. The exact blow's run (theory §4d) compiles in some 17 s of CPU time,
+    and its twin runs the README's blow in 0.03 s. ``impactbar warmup`` (:func:`disable`) compiles
+    it on its first call.
 
     Parameters
     ----------
@@ -255,7 +271,7 @@ scalar by its reciprocal's product, numba as CPython does, an ulp apart in some 
     if (not isinstance(disp, CPUDispatcher) or disp.signatures or _PROCESS.eager
             or _FIRST.get(disp, 0.0) >= budget or _cached(disp) or not _exact(disp)):
         return disp
-    return _Twin(disp, first=True, scratch=scratch)
+    return _Twin(disp, first=True, scratch=scratch, budget=budget)
 
 
 def _arrays(x, out: list) -> list:
@@ -309,7 +325,9 @@ def _exact(disp) -> bool:
 # --------------------------------------------------------------------------------------------------
 def twin(disp) -> types.FunctionType:
     """The interpreted twin of a numba dispatcher: its Python function, with the globals of its
-    module in which every dispatcher is its twin and ``math`` rounds as numba's does."""
+    module in which every dispatcher is its twin, ``math`` rounds as numba's does, and the operators
+    of :mod:`impactbar._shared.twinops` (a complex quotient, a float's integer power) are their
+    Python forms, which round as numba's machine code."""
     hit = _TWINS.get(disp)
     if hit is not None:
         return hit
@@ -333,6 +351,8 @@ def _twin_globals(module_dict) -> dict:
                 g[k] = twin(v)
             elif v is math:
                 g[k] = _MATH
+            elif python_form(v) is not None:  # (quot, ipow: rounded as the machine code rounds)
+                g[k] = python_form(v)
     return g
 
 

@@ -10,6 +10,7 @@ import numba
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.twinops import ipow, quot
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 
@@ -45,15 +46,15 @@ def _recursions(mu, amu, eb, ea, a, b, K, out):
             damp *= x / top
         cur = 0.0 * eb
         for kk in range(top, k0, -1):
-            pb = 1.0 if b == 1.0 else b ** kk  # (b = 1: every caller's, the moments in u = tau / b)
-            cur = (pb * eb - (a ** kk if a > 0.0 else 0.0) * ea - mu * cur) / kk
+            pb = 1.0 if b == 1.0 else ipow(b, kk)  # (b = 1: every caller's, the moments in u = tau / b)
+            cur = quot(pb * eb - (ipow(a, kk) if a > 0.0 else 0.0) * ea - mu * cur, kk)
             if kk - 1 < K:
                 out[kk - 1] = cur
     pb = 1.0
     pa = 1.0
     prev = 0.0 * eb
     for k in range(k0):
-        val = (eb - ea) / mu if k == 0 else (pb * eb - pa * ea) / mu - k / mu * prev
+        val = quot(eb - ea, mu) if k == 0 else quot(pb * eb - pa * ea, mu) - quot(k, mu) * prev
         out[k] = val
         prev = val
         pb *= b

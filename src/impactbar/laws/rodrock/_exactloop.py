@@ -44,6 +44,7 @@ import math
 import numba
 
 from ..._shared.literals import plain_literals
+from ..._shared.twinops import checkpoint
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._exactbit import node_bit
@@ -390,6 +391,7 @@ def run(ws, t_account):
     tmax = PR[PR_TMAX]
     maxp = PR[PR_MAXP]
     while True:
+        checkpoint()  # (compiled: nothing; its twin: abandoned here once past its budget)
         w = CI[CI_WIN]
         t = w * h
         if t >= tmax:

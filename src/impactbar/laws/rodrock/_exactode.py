@@ -12,6 +12,7 @@ import numba
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.twinops import quot
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._exactpieces import DC, EPS, NEAR, SERIES_MAX, SERIES_TOL, blk_clear, blk_trim, cabs
@@ -35,14 +36,14 @@ def _ode1_series(Y, NY, row, G, e, n, delta, grows, ex, L):
     for kk in range(DC - 1):
         if grows:
             if kk > 0:
-                ex[kk] = ex[kk - 1] * dp / kk
+                ex[kk] = quot(ex[kk - 1] * dp, kk)
             R = 0.0j  # the coefficient of s^kk in e^{dp s} P(s)
             for i in range(min(kk, n - 1) + 1):
                 R += G[e, i] * ex[kk - i]
-            q = R / (kk + 1)
+            q = quot(R, kk + 1)
         else:
             P = G[e, kk] if kk < n else 0.0j
-            q = (P + delta * q) / (kk + 1)
+            q = quot(P + delta * q, kk + 1)
         Y[row, kk + 1] += q
         last = kk + 1
         Lp *= L
@@ -130,7 +131,7 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
             a0 = lam[e] - r
             qn = 0.0j
             for jj in range(n - 1, -1, -1):
-                qn = (G[e, jj] - (jj + 1) * qn) / a0
+                qn = quot(G[e, jj] - (jj + 1) * qn, a0)
                 Y[e, jj] += qn
             if n > NY[e]:
                 NY[e] = n
@@ -178,7 +179,7 @@ def blk_fold(Y, NY, e, c, lam, L, ex):
     last = 0
     for kk in range(DC):
         if kk > 0:
-            ex[kk] = ex[kk - 1] * d / kk
+            ex[kk] = quot(ex[kk - 1] * d, kk)
         R = 0.0j
         for i in range(min(kk, n - 1) + 1):
             R += Y[e, i] * ex[kk - i]

@@ -10,6 +10,7 @@ import math
 import numba
 
 from ..._shared.literals import plain_literals
+from ..._shared.twinops import ipow
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
@@ -211,7 +212,7 @@ def blk_bound(B, N, lam, BIN, a, b, k):
             s = 0.0
             ff = 1.0  # d! / (d - i)!
             for i in range(min(k, d) + 1):
-                s += BIN[k, i] * al ** (k - i) * ff * b ** (d - i)
+                s += BIN[k, i] * ipow(al, k - i) * ff * ipow(b, d - i)
                 ff *= d - i
             tot += c * g * s
     return tot
@@ -432,7 +433,7 @@ def _term_bound(re, d, Lb):
         if tm < Lb:
             return math.exp(d * (math.log(tm) - 1.0))
         return math.exp(d * math.log(Lb) + re * Lb)
-    return Lb ** d
+    return ipow(Lb, d)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -527,8 +528,8 @@ def _shift_scale(e, k, tail, delta, dt, lam, BIN, PI, TK, TC):
         ei = TK[i] // DC
         d = TK[i] - ei * DC
         if ei == e and d >= k:
-            slope = (d - k) * ad ** (d - k - 1) * dt if d > k else 0.0
-            r += cabs(TC[i]) * BIN[d, k] * (ad ** (d - k) + slope)
+            slope = (d - k) * ipow(ad, d - k - 1) * dt if d > k else 0.0
+            r += cabs(TC[i]) * BIN[d, k] * (ipow(ad, d - k) + slope)
     return r * math.exp(lam[e].real * delta)
 
 

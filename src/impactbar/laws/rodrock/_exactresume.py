@@ -22,6 +22,15 @@ def pool_bytes(pcap, tcap):
     return pcap * 72 + tcap * 24
 
 
+def run_kernel(ws, t_account):
+    """:func:`~._exactloop.run` of ``ws`` (``t_account``: its own), by its interpreted twin in a
+    process's first blows (:func:`~impactbar.dynamics.compiled.interpreted_first`: the machine code's
+    bits, without its compile), by its machine code once they have spent the twin's budget."""
+    from ...dynamics.compiled import interpreted_first
+
+    interpreted_first(K.run)(ws, t_account)
+
+
 def _run(ws, t_max, stops, h, snaps, scale):
     """The run of ``ws`` to ``t_max`` (``None``: its end), stopped at the last window boundary before
     each of ``stops`` (increasing; those it is past skipped) for a snapshot (:func:`_take`, appended
@@ -35,13 +44,13 @@ def _run(ws, t_max, stops, h, snaps, scale):
         if w <= CI[S.CI_WIN] or stop >= end:
             continue
         PR[S.PR_TMAX] = stop
-        K.run(ws, -1.0)
+        run_kernel(ws, -1.0)
         if CI[S.CI_STATUS] != 0 or CI[S.CI_END] != P.TMAX or CT[S.CT_T] != stop:
             PR[S.PR_TMAX] = end
             return
         snaps.append(_take(ws, scale))
     PR[S.PR_TMAX] = end
-    K.run(ws, -1.0)
+    run_kernel(ws, -1.0)
 
 
 def _take(ws, scale):

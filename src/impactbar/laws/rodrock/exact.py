@@ -77,11 +77,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._exactdata import _Data
-from ._exactresume import _resumed, _run, pool_bytes
+from ._exactresume import _resumed, _run, pool_bytes, run_kernel
 from ._records import (  # the pool's columns and the channels' lists
     CHI_HEAD,
     CHI_TAIL,
@@ -358,7 +357,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
                         None if data is None else data.terms(lam, scale), reuse=not lean)
         if data is not None and not lean and _energies:  # the piston's energy at impact: its waves'
-            K.run(ws, 0.0)  # (kinetic and strain: account, through run)
+            run_kernel(ws, 0.0)  # (kinetic and strain: account, through run)
             PR[S.PR_E0] = ws[S.WS_CT][S.CT_EP]
         snaps = []
         _run(ws, t_max, stops, h, snaps, scale)

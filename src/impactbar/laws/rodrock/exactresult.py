@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _exacthistory as H
-from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._bit import feed_gain
+from ._exactresume import run_kernel
 from ._records import (  # columns by name
     CHI_HEAD,
     EP_DISS,
@@ -259,7 +259,7 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     n_p = Tp.size
     t_end = float(CT[S.CT_T])
     if final and CT[S.CT_TACC] != t_end:  # (the energies at the end, unless the run's last pass was there)
-        K.run(ws, t_end)  # (account, through run)
+        run_kernel(ws, t_end)  # (account, through run)
     Pp, Ep, Er = CT[S.CT_PP], CT[S.CT_EP], CT[S.CT_ER]
     br = int(BI[S.BI_BRANCH])
     p = BS[S.BS_P]
