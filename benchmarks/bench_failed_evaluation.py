@@ -127,8 +127,15 @@ def main(argv=None) -> int:
         cells = [f"{v:18.3g}" if isinstance(v, float) else f"{'-' if v is None else v!s:>18s}"
                  for v in (a[key], b[key])]
         print(f"{key:34s} {cells[0]} {cells[1]}")
-    same = [x["record"] == y["record"] for x, y in zip(best["baseline"], best["new"], strict=True)]
-    print(f"the same records (every figure but the seconds), to the bit: {sum(same)} of {len(same)}")
+    same, only = [], set()
+    for x, y in zip(best["baseline"], best["new"], strict=True):
+        old, new = json.loads(x["record"]), json.loads(y["record"])
+        only |= {f"{k} (baseline)" for k in old.keys() - new.keys()}
+        only |= {f"{k} (new)" for k in new.keys() - old.keys()}
+        same.append(all(old[k] == new[k] for k in old.keys() & new.keys()))
+    one = f"; written by one tree only: {', '.join(sorted(only))}" if only else ""
+    print(f"the same records (every figure but the seconds, of the keys both trees write), to the bit: "
+          f"{sum(same)} of {len(same)}{one}")
     return 0
 
 
