@@ -223,3 +223,50 @@ def test_the_warmups_bar_valve_and_chunk_kernels_take_one_signature_each(tmp_pat
                    "impactbar.dynamics._event_loop._run_free", "impactbar.orbits._rigid_scalar._verdict"):
         assert max(counts.get(kernel, [0])) == 1, (kernel, counts.get(kernel))
     assert {k: n for k, n in counts.items() if max(n) > 1} == {}
+
+
+_ONE_LINE = r"""
+import sys
+from impactbar.cli import warmup
+
+warmup._start(in_worker=False)
+print(len(warmup._line(sys.argv[1])[3]))
+"""
+
+
+@pytest.mark.slow  # about a minute of CPU: the parallel warm-up until its first line finishes
+@pytest.mark.timeout(1200)
+def test_ctrl_c_ends_a_parallel_warmup_and_keeps_what_finished(tmp_path):
+    """Ctrl-C (SIGINT to the terminal's process group: the command and its workers) while the
+    workers compile: status 130, one line saying how many kinds finished, no worker left, and a
+    finished kind's kernels cached (a new process's call of that kind compiles nothing)."""
+    import signal
+    import time
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "warmup", "--jobs", "2"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    labels = "|".join(re.escape(label) for label in KERNELS)
+    first = None
+    for line in proc.stdout:
+        if (m := re.match(rf"^({labels}) +[0-9.]+ s CPU", line)):
+            first = m[1]
+            break
+    assert first is not None
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=600)
+    assert proc.returncode == 130, err
+    said = rf"impactbar warmup: [0-9]+ of {len(KERNELS)} kinds finished, their kernels cached"
+    assert re.search(said, err), err
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:  # (no process of the command's group left)
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.5)
+    else:
+        raise AssertionError("a worker outlived the interrupted warm-up")
+    again = subprocess.run([sys.executable, "-c", _ONE_LINE, first], env=env, capture_output=True, text=True,
+                           check=True)
+    assert again.stdout.strip().splitlines()[-1] == "0", (first, again.stdout)

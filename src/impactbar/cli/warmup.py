@@ -262,16 +262,19 @@ LINE_AFTER = {
 _STATE: dict = {}
 
 
-def _start(in_worker: bool = True) -> None:
+def _start(in_worker: bool = True, lock=None) -> None:
     """Prepare this process (a worker's initializer, or the command's own with ``--jobs 1``) to make
     the warm-up's calls: every kernel compiled, not run interpreted while a child compiles it, and
     each compile recorded by its function and argument types (a worker ignores Ctrl-C, which ends it
     through its parent's :meth:`~multiprocessing.pool.Pool.terminate`, as a terminal sends Ctrl-C to
-    the parent's workers too)."""
+    the parent's workers too); with ``lock``, the workers' lock, its saves to numba's cache one at a
+    time (:func:`_saves_one_at_a_time`)."""
     if in_worker:
         import signal
 
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if lock is not None:
+        _saves_one_at_a_time(lock)
     from numba.core import event
 
     from ..dynamics.compiled import disable_tiers
@@ -290,6 +293,34 @@ def _start(in_worker: bool = True) -> None:
 
     _STATE.update(tasks=dict(_tasks()), keys=keys, callbacks=set(), listener=Listener())
     event.register("numba:compile", _STATE["listener"])
+
+
+def _saves_one_at_a_time(lock) -> None:
+    """Make numba's cache in this process save an entry (read its function's index, add the entry,
+    write the index and the entry's file) holding ``lock``, which the warm-up's workers share.
+
+    numba writes each file whole (``numba/core/caching.py``: ``IndexDataCacheFile._open_for_write``
+    writes a file named with a uuid4 and ``os.replace``-s it onto the name), so a reader sees an old or
+    a new file, never half of one; but ``IndexDataCacheFile.save`` reads the index, adds the entry and
+    writes it back without a lock: two processes saving two signatures of one function at once could
+    each write an index without the other's entry, or number both entries' files alike and leave
+    the index naming the other signature's code. The package's kernels take one signature each, all
+    but a few (the exact blow's ``blk_bound`` and ``_put``, two: ``benchmarks/bench_first_call.py``
+    lists them), so the workers save one at a time; a worker that has waited 60 s for the lock (one
+    ended while holding it) saves without it."""
+    from numba.core import caching
+
+    save = caching.IndexDataCacheFile.save
+
+    def locked(self, key, data):
+        held = lock.acquire(timeout=60)
+        try:
+            return save(self, key, data)
+        finally:
+            if held:
+                lock.release()
+
+    caching.IndexDataCacheFile.save = locked
 
 
 def _stop() -> None:
@@ -326,13 +357,8 @@ def _in_workers(labels, jobs: int, w: int) -> int:
     compiles a callee that another has not yet cached, so the compiles add up to more), the wall
     time and the calls' CPU time. A Ctrl-C ends the workers and keeps what they cached.
 
-    Concurrent workers write one cache: numba (``numba/core/caching.py``, ``IndexDataCacheFile``)
-    writes each index and data file through ``_open_for_write``, a file named with a uuid4 and then
-    ``os.replace``'d onto its name, so a reader sees a whole file, old or new, and a worker ended in
-    the middle leaves at most a temporary file. An index's ``save`` reads, adds and writes it back
-    without a lock: two processes saving different signatures of one function at once could drop
-    one (and number both data files alike); here every kernel takes one signature
-    (``tests/cli/test_warmup.py``), so two saves of one kernel write the same entry. The C callbacks
+    The workers write one cache, each save whole and one at a time (:func:`_saves_one_at_a_time`),
+    so a worker ended in the middle leaves at most a temporary file. The C callbacks
     (``numba.cfunc(cache=True)``) use the same cache (``FunctionCache``); the modules generated for
     a network are written once under their content's hash (``os.replace``) and numba keys its cache
     by their content (a hash of the source file since numba 0.57), so two workers that generate one
@@ -348,7 +374,8 @@ def _in_workers(labels, jobs: int, w: int) -> int:
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
     try:  # (the workers start ignoring Ctrl-C, which a terminal sends them too: terminate() ends them)
-        pool = multiprocessing.get_context("spawn").Pool(jobs, initializer=_start)
+        spawn = multiprocessing.get_context("spawn")
+        pool = spawn.Pool(jobs, initializer=_start, initargs=(True, spawn.Lock()))
     finally:
         if main:
             signal.signal(signal.SIGINT, previous)
