@@ -117,6 +117,7 @@ def test_a_free_worker_makes_the_longest_line_whose_lines_before_have_finished(m
     assert warmup._next_line(labels, [], labels) == "b"  # (c, the longest, reuses a)
     assert warmup._next_line(["a", "c", "d"], ["b"], labels) == "a"
     assert warmup._next_line(["c", "d"], ["b"], labels) is None  # (a runs)
+    assert warmup._next_line(["c", "d"], ["b"], labels, wait=False) == "c"  # (none runs: no deadlock)
     assert warmup._next_line(["c", "d"], ["b", "a"], labels) == "c"
     assert warmup._next_line(["d"], [], ["b", "d"]) is None
     assert warmup._next_line(["d"], [], ["d"]) == "d"

@@ -5,7 +5,8 @@ package, or in ``NUMBA_CACHE_DIR``); a first call therefore costs 10 to 25 s of 
 machine (``docs/performance.md``). This command makes those first calls on small problems, one per
 kind of computation, so that an installation (a container image, a cluster's shared environment,
 the workers of a sweep) pays the compile once, up front, and every later process finds the kernels
-compiled.
+compiled. numba compiles on one core, so the kinds compile in worker processes at once, one a core
+by default (``--jobs``), into the same cache.
 """
 
 from __future__ import annotations
@@ -379,16 +380,16 @@ def _in_workers(labels, jobs: int, w: int) -> int:
     finally:
         if main:
             signal.signal(signal.SIGINT, previous)
-    pending, done, results, free = list(labels), [], queue.SimpleQueue(), [jobs]
+    pending, done, results, free = list(labels), [], queue.SimpleQueue(), jobs
 
     def hand_out():  # (to each free worker the next line, while one is ready)
-        while free[0] and pending:
-            label = _next_line(pending, [line[0] for line in done], labels)
-            if label is None and free[0] < jobs:
+        nonlocal free
+        while free and pending:
+            label = _next_line(pending, [label for label, *_ in done], labels, wait=free < jobs)
+            if label is None:
                 return  # (a line running makes one ready)
-            label = label or pending[0]
             pending.remove(label)
-            free[0] -= 1
+            free -= 1
             pool.apply_async(_line, (label,), callback=results.put, error_callback=results.put)
 
     try:
@@ -401,7 +402,7 @@ def _in_workers(labels, jobs: int, w: int) -> int:
             if isinstance(line, BaseException):
                 raise line
             done.append(_shown(line, w))
-            free[0] += 1
+            free += 1
             hand_out()
         pool.close()
     except KeyboardInterrupt:
@@ -418,13 +419,15 @@ def _in_workers(labels, jobs: int, w: int) -> int:
     return 0
 
 
-def _next_line(pending, finished, labels):
+def _next_line(pending, finished, labels, wait: bool = True):
     """The line a free worker makes next: the longest (:data:`LINE_COST`) of those pending whose
     lines before (:data:`LINE_AFTER`, those among ``labels``) have finished, so that it loads their
-    kernels from the cache rather than compile them again beside them; ``None`` while none is (the
-    worker waits for a line to finish)."""
+    kernels from the cache rather than compile them again beside them; while none is, ``None`` (the
+    worker waits for a running line to finish), or with ``wait`` false (no line runs) the longest
+    pending."""
     ready = [label for label in pending if set(LINE_AFTER.get(label, ())) & set(labels) <= set(finished)]
-    return max(ready, key=lambda label: LINE_COST.get(label, float("inf")), default=None)
+    return max(ready or ([] if wait else pending), key=lambda label: LINE_COST.get(label, float("inf")),
+               default=None)
 
 
 def _summary(done, wall: float, jobs: int) -> str:
