@@ -1,14 +1,16 @@
 """Each line of ``impactbar warmup`` alone: its first call in a fresh process with a new, empty numba
-cache, the figures ``impactbar.cli.warmup.LINE_COST`` holds (the order in which a parallel warm-up
-hands the lines to its workers, the longest first).
+cache, against the same line's in the one-process warm-up (``impactbar warmup --jobs 1``, after the
+lines before it: ``impactbar.cli.warmup.LINE_COST``). A line that alone compiles many more kernels
+reuses those of the lines before it, which ``impactbar.cli.warmup.LINE_AFTER`` names, so that a
+parallel warm-up starts it once they have finished.
 
 Run: ``python benchmarks/probes/warmup_line_costs.py [LABEL ...]`` (default every line).
 
 Per line, one after another: the call's CPU seconds (``time.process_time`` in the child, its imports
 not counted), the kernels it compiled (numba's compiles and the C callbacks, as the warm-up counts
 them; alone, a line compiles the callees that the lines before it compile in a serial warm-up), the
-child's wall time and the load average at its end; then the lines as ``LINE_COST``'s literal, the
-longest first. Each child also has a new, empty folder for the modules generated for the oil
+child's wall time and the load average at its end; then the lines' costs alone, the longest first.
+Each child also has a new, empty folder for the modules generated for the oil
 circuit's network (``XDG_CACHE_HOME``).
 """
 
@@ -61,10 +63,8 @@ def main(argv=None) -> int:
         _, dt, n = json.loads(done.stdout.strip().splitlines()[-1])
         costs[label] = dt
         print(f"{label:<36} {dt:>6.1f} {n:>8d} {wall:>7.1f} {os.getloadavg()[0]:>5.1f}", flush=True)
-    print("\nLINE_COST = {")
-    for label, dt in sorted(costs.items(), key=lambda kv: -kv[1]):
-        print(f"    {label!r}: {dt:.1f},".replace("'", '"'))
-    print("}")
+    print("\nalone, the longest first: " + ", ".join(
+        f"{label} {dt:.1f}" for label, dt in sorted(costs.items(), key=lambda kv: -kv[1])))
     return 0
 
 
