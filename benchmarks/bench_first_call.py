@@ -1,6 +1,7 @@
 """A designer's first call of each entry point with an empty numba cache, here and on another tree.
 
-Run: ``python benchmarks/bench_first_call.py [--rows ROW ...] [--quick] [--against SRC] [--kernels K]``.
+Run: ``python benchmarks/bench_first_call.py [--rows ROW ...] [--quick] [--against SRC] [--kernels K]
+[--jobs N ...]``.
 
 Each cell is a fresh process with a new, empty numba cache (``NUMBA_CACHE_DIR``), one-thread BLAS and
 neither ``NUMBA_OPT`` nor ``IMPACTBAR_TIERED``, that makes one row's first call:
@@ -14,7 +15,9 @@ neither ``NUMBA_OPT`` nor ``IMPACTBAR_TIERED``, that makes one row's first call:
 - ``rock``: ``examples/circuit_drifter_rock.toml``'s ``orbit()`` (the oil circuit on a rod and rock);
 - ``blow``: the README's first exact blow (``single_blow`` under ``RodRock``, a 40-long rod on a
   bilinear rock);
-- ``warmup``: ``impactbar warmup``, the whole command;
+- ``warmup``: ``impactbar warmup``, the whole command; with ``--jobs N ...``, one row a count of its
+  worker processes (``impactbar warmup --jobs N``; the baseline's row is its plain ``impactbar
+  warmup``, timed once, which compiles in one process as ``--jobs 1`` does);
 - ``cluster``: a fresh local dask cluster (2 workers, one thread each) whose workers read a shared
   numba cache that ``impactbar warmup`` filled (:class:`impactbar.sweeps.NumbaCacheFolder`), each
   worker's first point of a small sweep against a warm worker's (the same workers' second point);
@@ -23,11 +26,13 @@ neither ``NUMBA_OPT`` nor ``IMPACTBAR_TIERED``, that makes one row's first call:
 
 The figure of a row is the CPU time of its call inside the child (``time.process_time``, imports not
 counted), or for the commands (``paper``, ``warmup``) the child's whole CPU time (``getrusage`` of
-the finished child, its own children included). CPU time, not wall time: the development machine
-is shared by many jobs, which change the wall time far more than the CPU time (though a loaded
-machine's caches still slow a compile some 10-30 %). Each row also counts numba's compiles
-(``numba:compile`` events; the oil circuit's C callbacks, compiled at import without that event,
-are not counted) and, without ``--quick``, times the same call again in a new process on the cache
+the finished child, its own children included: a parallel warm-up's workers); a row's notes give the
+child's wall time too (which a parallel warm-up's workers shorten). CPU time, not wall time: the
+development machine is shared by many jobs, which change the wall time far more than the CPU time
+(though a loaded machine's caches still slow a compile some 10-30 %). Each row also counts numba's
+compiles (``numba:compile`` events in the child, not in a parallel warm-up's workers, whose count
+is in the warm-up's last line; the oil circuit's C callbacks, compiled at import without that
+event, are not counted) and, without ``--quick``, times the same call again in a new process on the cache
 the first filled (``warm``). With ``--against SRC`` (a package tree, the folder holding
 ``impactbar``) that tree is timed too, alternately with this one, and the rows' results (a digest of
 each call's numbers) are compared to the bit. A row that misses its goal lists its ``--kernels K``
@@ -47,6 +52,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -101,10 +107,13 @@ def timed(call):
 
 if row in ("paper", "warmup"):
     from impactbar.cli import main
-    argv = ["paper", "--out", out_dir, "--quiet"] if row == "paper" else ["warmup"]
+    argv = ["paper", "--out", out_dir, "--quiet"] if row == "paper" else ["warmup", *sys.argv[4:]]
     first, status = timed(lambda: main(argv))
     assert status == 0, status
     digest = open(out_dir + "/fig5.csv").read() if row == "paper" else ""
+    import resource  # (the largest resident memory of this process and of its workers, finished)
+    out["largest process (MB)"] = max(resource.getrusage(w).ru_maxrss / 1024
+                                      for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
 elif row == "simulate":
     from impactbar import BarModel, CosineLoad, InitialState, simulate
     first, run = timed(lambda: simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0),
@@ -165,13 +174,15 @@ def _env(src: str, cache: str) -> dict:
     return env
 
 
-def _child(src: str, row: str, cache: str) -> dict:
-    """One fresh process on the package tree ``src`` and the numba cache ``cache``: the row's call."""
+def _child(src: str, row: str, cache: str, extra: tuple = ()) -> dict:
+    """One fresh process on the package tree ``src`` and the numba cache ``cache``: the row's call
+    (the command's options ``extra`` after its own)."""
     out = tempfile.mkdtemp(prefix="impactbar-first-out-")
     try:
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        done = subprocess.run([sys.executable, "-c", _CHILD, row, str(ROOT), out], env=_env(src, cache),
-                              capture_output=True, text=True)
+        before, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+        done = subprocess.run([sys.executable, "-c", _CHILD, row, str(ROOT), out, *extra],
+                              env=_env(src, cache), capture_output=True, text=True)
+        wall = time.perf_counter() - t0
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
     finally:
         shutil.rmtree(out, ignore_errors=True)
@@ -179,24 +190,28 @@ def _child(src: str, row: str, cache: str) -> dict:
         raise RuntimeError(f"{row} on {src} failed:\n{done.stderr[-3000:]}")
     r = json.loads(done.stdout.strip().splitlines()[-1])
     r["whole"] = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    r["wall"] = wall
+    if row == "warmup":  # (its own count: numba's compiles and the C callbacks, in its workers too)
+        r["its last line"] = next(x for x in done.stdout.splitlines() if " kernels compiled in " in x)
     if ROWS[row][2]:
         r["first"] = r["whole"]
     return r
 
 
-def first_call(src: str, row: str, warm: bool = False) -> dict:
+def first_call(src: str, row: str, warm: bool = False, extra: tuple = ()) -> dict:
     """The row's first call in a fresh process with a new, empty numba cache on the package tree
-    ``src``; with ``warm``, also the same call in a second fresh process on the cache the first
-    filled (``r["warm"]``, its CPU seconds, and ``r["warm compiles"]``)."""
+    ``src`` (the command's options ``extra``); with ``warm``, also the same call in a second fresh
+    process on the cache the first filled (``r["warm"]``, its CPU seconds, and ``r["warm
+    compiles"]``)."""
     if row == "cluster":
         from _cluster import cluster_first_points
 
         return cluster_first_points(src, _env(src, ""))
     cache = tempfile.mkdtemp(prefix="impactbar-first-")
     try:
-        r = _child(src, row, cache)
+        r = _child(src, row, cache, extra)
         if warm:
-            w = _child(src, row, cache)
+            w = _child(src, row, cache, extra)
             r["warm"], r["warm compiles"] = w["first"], w["compiles"]
     finally:
         shutil.rmtree(cache, ignore_errors=True)
@@ -222,19 +237,28 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=1, help="processes per tree (the least CPU time kept)")
     ap.add_argument("--kernels", type=int, default=3, metavar="K",
                     help="the K slowest kernels of a row that misses its goal (default 3)")
+    ap.add_argument("--jobs", type=int, nargs="+", metavar="N",
+                    help="the warmup row once for each N, as impactbar warmup --jobs N on this tree")
     a = ap.parse_args(argv)
     rows = a.rows or (QUICK if a.quick else tuple(ROWS))
+    plan = [(row, j) for row in rows for j in (a.jobs if row == "warmup" and a.jobs else [None])]
+    measured = {}  # (tree, row, options): its result (the baseline's warm-up timed once for all N)
     here = str(ROOT / "src")
     trees = ([("baseline", a.against)] if a.against else []) + [("now", here)]
     print("CPU seconds of each first call with an empty numba cache, each in a fresh process (CPU "
           "time, not wall time: this machine is shared, which disturbs the wall time far more)")
     print(f"{'row':<52} {'baseline':>9} {'now':>9} {'goal':>6}  {'':<7} {'compiles':>13} {'warm':>6}")
-    for row in rows:
+    for row, jobs in plan:
         title, goal, _ = ROWS[row]
+        title = title.replace(", whole", f" --jobs {jobs}, whole") if jobs else title
         best = {}
-        for _ in range(max(1, a.rounds)):
+        for k in range(max(1, a.rounds)):
             for label, src in trees:
-                r = first_call(src, row, warm=label == "now" and not a.quick)
+                extra = ("--jobs", str(jobs)) if jobs and label == "now" else ()
+                key = (label, row, extra, k)
+                if key not in measured:
+                    measured[key] = first_call(src, row, warm=label == "now" and not a.quick, extra=extra)
+                r = measured[key]
                 if label not in best or r["first"] < best[label]["first"]:
                     best[label] = r
         now = best["now"]
@@ -249,6 +273,8 @@ def main(argv=None) -> int:
                  if k not in ("first", "compiles", "digest", "kernels", "whole", "warm", "twice")]
         if not ROWS[row][2] and row != "cluster":
             notes.append(f"whole process {now['whole']:.1f} s")
+        if base and "wall" in base:
+            notes.append(f"baseline wall {base['wall']:.1f} s")
         if base and row != "cluster":
             notes.append("results the same to the bit" if base["digest"] == now["digest"]
                          else "results DIFFERENT")

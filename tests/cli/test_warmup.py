@@ -9,7 +9,16 @@ from pathlib import Path
 import numba
 import pytest
 
-from impactbar.cli.warmup import KERNELS, KERNELS_NUMBA, _tasks, kernel_count
+from impactbar.cli import main, warmup
+from impactbar.cli.warmup import (
+    KERNELS,
+    KERNELS_NUMBA,
+    LINE_AFTER,
+    LINE_COST,
+    _tasks,
+    default_jobs,
+    kernel_count,
+)
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"
 
@@ -94,13 +103,52 @@ def test_the_declared_kernels_are_the_warmups_calls():
     assert [label for label, _ in _tasks()] == list(KERNELS)
     assert kernel_count() == sum(KERNELS.values()) > 300
     assert all(n > 0 for n in KERNELS.values())
+    # the parallel warm-up's schedule has a measured cost for each line (a line without one goes first)
+    assert set(LINE_COST) == set(KERNELS) and all(t > 0 for t in LINE_COST.values())
 
 
-@pytest.mark.slow  # about 5 minutes (every kernel compiled into an empty cache): run by .ci/run
+def test_a_free_worker_makes_the_longest_line_whose_lines_before_have_finished(monkeypatch):
+    """The parallel warm-up's schedule, on lines of made-up costs: the longest ready line; none while
+    the lines a line reuses run (its worker waits); a line that waits for a line not made (pint
+    missing) does not wait; a line of no measured cost goes first."""
+    monkeypatch.setattr(warmup, "LINE_COST", {"a": 1.0, "b": 5.0, "c": 9.0, "d": 3.0})
+    monkeypatch.setattr(warmup, "LINE_AFTER", {"c": ("a",), "d": ("a", "b")})
+    labels = ["a", "b", "c", "d"]
+    assert warmup._next_line(labels, [], labels) == "b"  # (c, the longest, reuses a)
+    assert warmup._next_line(["a", "c", "d"], ["b"], labels) == "a"
+    assert warmup._next_line(["c", "d"], ["b"], labels) is None  # (a runs)
+    assert warmup._next_line(["c", "d"], ["b"], labels, wait=False) == "c"  # (none runs: no deadlock)
+    assert warmup._next_line(["c", "d"], ["b", "a"], labels) == "c"
+    assert warmup._next_line(["d"], [], ["b", "d"]) is None
+    assert warmup._next_line(["d"], [], ["d"]) == "d"
+    assert warmup._next_line(["a", "e"], [], labels + ["e"]) == "e"
+    # the lines' own: each line waits only for lines before it (the order --jobs 1 keeps)
+    order = list(KERNELS)
+    assert all(order.index(before) < order.index(line) for line, lines in LINE_AFTER.items()
+               for before in lines)
+
+
+def test_jobs_default_to_the_cores_and_refuse_fewer_than_one(capsys):
+    """Without ``--jobs`` the warm-up starts a worker a core this process may run on; ``--jobs 0``, or
+    a word, is one line on stderr and status 2, before anything compiles."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    assert default_jobs() == cores >= 1
+    for bad in ("0", "-2", "two"):
+        with pytest.raises(SystemExit) as exit_:
+            main(["warmup", "--jobs", bad])
+        assert exit_.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--jobs must be an integer of at least 1" in err[0], err
+
+
+@pytest.mark.slow  # about 5 minutes each (every kernel compiled into an empty cache): run by .ci/run
 @pytest.mark.timeout(2400)  # three processes, the first compiling: 20 minutes and more at load 9 on 2 cores
-def test_after_warmup_a_new_process_compiles_nothing(tmp_path):
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_after_warmup_a_new_process_compiles_nothing(tmp_path, jobs):
+    """One kind after another in one process (``--jobs 1``), or in two worker processes writing one
+    cache at once: a new process's first calls of every kind then compile nothing."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
-    cmd = [sys.executable, "-m", "impactbar.cli", "warmup"]
+    cmd = [sys.executable, "-m", "impactbar.cli", "warmup", "--jobs", jobs]
     first = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True).stdout
     lines = first.strip().splitlines()
     for label in ("periodic orbits, wave law", "position-switched drive", "rod and rock orbits, exact blows",
@@ -110,10 +158,24 @@ def test_after_warmup_a_new_process_compiles_nothing(tmp_path):
     # them without compiling (the sum is the figure the documentation quotes)
     counts = {m[1]: int(m[2]) for m in re.finditer(r"^(.+?) +[0-9.]+ s CPU +([0-9]+) kernels compiled$",
                                                     first, re.MULTILINE)}
-    assert list(counts) == list(KERNELS) and all(n > 0 for n in counts.values())
-    assert int(lines[-1].split()[0]) == sum(counts.values())  # "N kernels compiled in ... s of CPU time"
-    if ".".join(numba.__version__.split(".")[:2]) == KERNELS_NUMBA:  # (numba's own overloads count too)
-        assert counts == KERNELS
+    declared = ".".join(numba.__version__.split(".")[:2]) == KERNELS_NUMBA  # (numba's own overloads count)
+    if jobs == "1":
+        assert list(counts) == list(KERNELS) and all(n > 0 for n in counts.values())
+        assert int(lines[-1].split()[0]) == sum(counts.values())  # "N kernels compiled in ... s of CPU time"
+        if declared:
+            assert counts == KERNELS
+    else:  # the lines as they finish; a kernel two workers needed at once compiles in both ("N kernels
+        # compiled in W s, C s of CPU time in 2 worker processes (D of the T compiles a kernel that
+        # another worker compiled too)"), once in N: at most the one process's count, since numba's
+        # own overloads, not cached, that it compiled more than once may be split between the workers
+        assert sorted(counts) == sorted(KERNELS) and all(n >= 0 for n in counts.values())
+        summary = re.fullmatch(r"([0-9]+) kernels compiled in [0-9.]+ s, [0-9.]+ s of CPU time in 2 worker "
+                               r"processes \(([0-9]+) of the ([0-9]+) compiles .*", lines[-1])
+        assert summary is not None, lines[-1]
+        distinct, again, total = map(int, summary.groups())
+        assert total == sum(counts.values()) and distinct == total - again > 300
+        if declared:
+            assert distinct <= kernel_count() <= total
     # other parameters, loads and sizes than the warm-up's: the same kernels, one signature each; and
     # the warm-up again. The two only read the cache when they compile nothing (what is asserted), so
     # they run side by side (on CI's 2 cores, the second costs no wall time of its own)
@@ -162,3 +224,50 @@ def test_the_warmups_bar_valve_and_chunk_kernels_take_one_signature_each(tmp_pat
                    "impactbar.dynamics._event_loop._run_free", "impactbar.orbits._rigid_scalar._verdict"):
         assert max(counts.get(kernel, [0])) == 1, (kernel, counts.get(kernel))
     assert {k: n for k, n in counts.items() if max(n) > 1} == {}
+
+
+_ONE_LINE = r"""
+import sys
+from impactbar.cli import warmup
+
+warmup._start(in_worker=False)
+print(len(warmup._line(sys.argv[1])[3]))
+"""
+
+
+@pytest.mark.slow  # about a minute of CPU: the parallel warm-up until its first line finishes
+@pytest.mark.timeout(1200)
+def test_ctrl_c_ends_a_parallel_warmup_and_keeps_what_finished(tmp_path):
+    """Ctrl-C (SIGINT to the terminal's process group: the command and its workers) while the
+    workers compile: status 130, one line saying how many kinds finished, no worker left, and a
+    finished kind's kernels cached (a new process's call of that kind compiles nothing)."""
+    import signal
+    import time
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "warmup", "--jobs", "2"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    labels = "|".join(re.escape(label) for label in KERNELS)
+    first = None
+    for line in proc.stdout:
+        if (m := re.match(rf"^({labels}) +[0-9.]+ s CPU", line)):
+            first = m[1]
+            break
+    assert first is not None
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=600)
+    assert proc.returncode == 130, err
+    said = rf"impactbar warmup: [0-9]+ of {len(KERNELS)} kinds finished, their kernels cached"
+    assert re.search(said, err), err
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:  # (no process of the command's group left)
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.5)
+    else:
+        raise AssertionError("a worker outlived the interrupted warm-up")
+    again = subprocess.run([sys.executable, "-c", _ONE_LINE, first], env=env, capture_output=True, text=True,
+                           check=True)
+    assert again.stdout.strip().splitlines()[-1] == "0", (first, again.stdout)

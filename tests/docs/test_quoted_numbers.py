@@ -150,6 +150,14 @@ def test_the_warmup_cost_is_quoted_as_the_performance_page_measured_it():
         quote = re.search(r"`impactbar warmup` compiles every kernel at once "
                           r"\(([0-9]+) kernels in ([0-9]+) s of CPU time", text)
         assert quote is not None and quote.groups() == (kernels, seconds), (page, kernels, seconds)
+    # and the wall times of two workers and of one process, measured in the same run
+    walls = re.search(r"with `--jobs 2`, the default on 2 cores, ([0-9]+) s of wall time against ([0-9]+) s "
+                      r"in one process", row)
+    assert walls is not None, row
+    for page in ("docs/getting_started.md", "README.md", "docs/performance.md"):
+        text = re.sub(r"\s+", " ", (ROOT / page).read_text())
+        quote = re.search(r"took ([0-9]+) s(?: of wall time)? against ([0-9]+) s", text)
+        assert quote is not None and quote.groups() == walls.groups(), (page, walls.groups())
 
 
 #: where the pages quote the warm-up's kernels: after the command's name in its sentence, or after
