@@ -230,7 +230,7 @@ def test_a_design_whose_piston_buzzes_on_the_shank_is_classified_in_a_bounded_nu
     # (checked there by a restart), stable, the relief valve opening during its period
     found = rec["switch_orbit"]
     assert found["stable"] and found["max_multiplier"] == pytest.approx(0.575, abs=1e-3)
-    assert found["border_margins_Pa"]["relief"] < -0.5e6 and not found["cavitates"]
+    assert found["relief_opens"] and found["relief_margin_Pa"] < -0.5e6 and not found["cavitates"]
     assert rec["switch_summary"] == ("from rest at the switch point: a stable one-impact orbit (|mu| 0.575), "
                                      "50.3 Hz, 8.92 m/s, relief open")
     assert rec["switch_summary"] in _page()  # (quoted there)

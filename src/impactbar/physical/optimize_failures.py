@@ -159,24 +159,24 @@ def switch_orbit(drifter) -> dict:
     Returns
     -------
     dict
-        ``stable``, ``max_multiplier`` (the largest multiplier's modulus), ``period_s``,
-        ``blow_frequency_Hz``, ``impact_velocity_m_s``, ``cavitates`` and ``border_margins_Pa`` (the
-        relief's negative where it opens during the period); or ``{"error": ...}`` (its first line,
-        at most :data:`ERROR_CHARS` characters).
+        The orbit's outputs as a design map stores them (the view ``"store"`` of
+        :mod:`~impactbar.physical.outputs` the machine has, the rock's where it has a drill string),
+        by key in their units: ``stable``, ``max_multiplier`` (the largest multiplier's modulus),
+        ``period_s``, ``blow_frequency_Hz``, ``impact_velocity_m_s``, ``cavitates``,
+        ``relief_opens``, ``relief_margin_Pa``, ...; or ``{"error": ...}`` (its first line, at most
+        :data:`ERROR_CHARS` characters).
     """
-    import numpy as np
-
     from .circuit import CircuitDrifterOrbit
     from .circuit_switch import switch_start_orbit
+    from .outputs import output_values, outputs
 
     try:
         point = CircuitDrifterOrbit(drifter, switch_start_orbit(drifter))
     except ValueError as err:
         return {"error": str(err).splitlines()[0][:ERROR_CHARS]}
-    return {"stable": bool(point.stable), "max_multiplier": float(np.abs(point.orbit.multipliers).max()),
-            "period_s": float(point.period_s), "blow_frequency_Hz": float(point.blow_frequency_Hz),
-            "impact_velocity_m_s": float(point.impact_velocity_m_s), "cavitates": bool(point.cavitates),
-            "border_margins_Pa": {k: float(v) for k, v in point.border_margins_Pa.items()}}
+    stored = outputs("store", "circuit", rock=drifter.drill is not None)
+    values = output_values(point, stored)
+    return {o.key: bool(values[o.name]) if o.dtype == "b1" else float(values[o.name]) for o in stored}
 
 
 def switch_summary(found: dict) -> str:
@@ -198,8 +198,7 @@ def switch_summary(found: dict) -> str:
     --------
     >>> from impactbar.physical.optimize_failures import switch_summary
     >>> switch_summary({"stable": True, "max_multiplier": 0.575, "blow_frequency_Hz": 50.26,
-    ...                 "impact_velocity_m_s": 8.918, "cavitates": False,
-    ...                 "border_margins_Pa": {"relief": -6.1e5}})
+    ...                 "impact_velocity_m_s": 8.918, "cavitates": False, "relief_opens": True})
     'from rest at the switch point: a stable one-impact orbit (|mu| 0.575), 50.3 Hz, 8.92 m/s, relief open'
     >>> switch_summary({"error": "the rear chamber empties"})
     'from rest at the switch point: no one-impact orbit either (the rear chamber empties)'
@@ -211,7 +210,7 @@ def switch_summary(found: dict) -> str:
     said = [f"{head} a{' stable' if found['stable'] else 'n unstable'} one-impact orbit "
             f"(|mu| {found['max_multiplier']:.3g})", f"{found['blow_frequency_Hz']:.3g} Hz",
             f"{found['impact_velocity_m_s']:.3g} m/s"]
-    if found["border_margins_Pa"].get("relief", 0.0) < 0.0:
+    if found.get("relief_opens"):
         said.append("relief open")
     if found["cavitates"]:
         said.append("cavitating")
