@@ -4,24 +4,18 @@ over N plus the measured overheads (a closed form on made-up figures), and the w
 reads (``client.run(time.process_time)``) counts a task's CPU on a worker (a task that spins for a
 known CPU time)."""
 
-import importlib.util
+import sys
 import time
 from pathlib import Path
 
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_optimize_drifter.py"
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+import bench_optimize_drifter as bench  # noqa: E402
 
 
-@pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("bench_optimize_drifter_under_test", _PATH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def _walls(bench, figures: dict, startup: list, probe: dict) -> dict:
+def _walls(figures: dict, startup: list, probe: dict) -> dict:
     walls = {f"{p}{w}": 0 if w in (" tasks", " flights") else 0.0 for p in bench.PHASES
              for w in ("", " CPU", " workers CPU", " tasks", " flights")}
     for phase, (wall, cpu, wcpu, tasks, flights) in figures.items():
@@ -33,13 +27,13 @@ def _walls(bench, figures: dict, startup: list, probe: dict) -> dict:
     return walls
 
 
-def test_projection_is_serial_cpu_plus_spread_cpu_over_n_plus_overheads(bench):
+def test_projection_is_serial_cpu_plus_spread_cpu_over_n_plus_overheads():
     probe = {"workers": 2, "flight s": 0.01, "task s": 0.004}
     figures = {"cluster start": (3.0, 0.2, 1.5, 0, 0), "sample": (150.0, 2.0, 260.0, 256, 1),
                "local searches": (80.0, 64.0, 0.5, 0, 0), "polish": (350.0, 33.0, 500.0, 324, 27),
                "classification": (30.0, 28.0, 0.1, 0, 0), "certificate": (18.0, 1.2, 30.0, 12, 1),
                "cluster close": (1.5, 0.1, 0.0, 0, 0)}
-    walls = _walls(bench, figures, [0.7, 0.8], probe)
+    walls = _walls(figures, [0.7, 0.8], probe)
     wall, cpu = 650.0, 140.0
     for n in (1, 2, 4, 8):
         rows = {r[0]: r for r in bench.projection(walls, wall, cpu, n)}
@@ -66,7 +60,7 @@ def _spin(seconds: float) -> float:
 
 
 @pytest.mark.slow
-def test_workers_cpu_counts_a_task_on_a_worker(bench):
+def test_workers_cpu_counts_a_task_on_a_worker():
     distributed = pytest.importorskip("distributed")
     with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                                    dashboard_address=None) as cluster,
