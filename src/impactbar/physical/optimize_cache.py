@@ -75,11 +75,12 @@ def read_gradients(path, tag: str) -> dict:
     Returns
     -------
     dict
+        ``{(id, kind): {"objective", "constraints", "id", "kind"}}``, in the order written.
 
     Raises
     ------
     ValueError
-        :func:`read_cache`'s.
+        Where the file is not readable (:func:`read_cache`).
     """
     return DesignCache(path, tag).gradients
 
