@@ -78,7 +78,6 @@ def _checkpoint():
         raise OverBudget("the twin ran past its CPU budget")
 
 
-
 def _quot(a, b):
     """``a / b`` as numba's machine code computes it (:func:`quot`).
 
