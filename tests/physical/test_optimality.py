@@ -308,6 +308,39 @@ def test_the_polish_scores_a_design_without_a_value_by_the_border_model_given():
         polish(valued, margins, gradients, [0.4, 0.8], designs=40, existence=lambda v: 1.0)
 
 
+def test_the_polish_stops_at_the_first_best_iterate_that_is_certified():
+    """With ``stationary`` (the certificate's test at each best iterate, its gradients those SLSQP asks
+    for), the polish of the disc problem stops at the first iterate whose KKT residual is at most the
+    tolerance, whatever budget is left: fewer designs than SLSQP's own stop, the residual returned is
+    that of :func:`certify` at the design returned (recomputed here), and the design is the closed
+    form's to the accuracy that residual implies; a tolerance that no iterate meets leaves SLSQP's
+    path and stop unchanged (the same designs to the bit)."""
+    from impactbar.physical.optimality import stopped_at_budget
+    from impactbar.physical.optimize_polish import polish
+
+    objective, margins, gradients, record = _disc()
+    u = np.array([0.44, 0.89])
+    asked = []
+
+    def stationary(tol):
+        def test(v, g, G):
+            asked.append(v.copy())
+            r = certify(g, G, record(v), v, ["a", "b"], method="exact").residual
+            return r if r <= tol else None
+        return test
+
+    full = polish(objective, margins, gradients, u, designs=60)
+    early = polish(objective, margins, gradients, u, designs=60, stationary=stationary(1e-2))
+    assert early.success and not stopped_at_budget(early) and early.message.startswith("stationary")
+    assert early.improved and early.nfev < full.nfev and early.residual <= 1e-2
+    again = certify(*gradients(early.x), record(early.x), early.x, ["a", "b"], method="exact")
+    assert again.residual == early.residual and again.verdict == "converged"
+    assert np.linalg.norm(early.x - np.array([1.0, 2.0]) / math.sqrt(5.0)) < 0.1
+    assert all(objective(v) <= early.fun for v in asked)  # (asked at best iterates alone)
+    never = polish(objective, margins, gradients, u, designs=60, stationary=stationary(-1.0))
+    assert never.residual is None and np.array_equal(never.x, full.x) and never.nfev == full.nfev
+
+
 def test_the_polish_runs_slsqp_on_one_blas_thread_whatever_the_caller_s():
     """SLSQP's iterates differ in their last bits between one and two OpenBLAS threads (the documented
     multistart's polish, replayed from its stored designs: its third iterate's pre-charge 0 against

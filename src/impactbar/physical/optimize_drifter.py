@@ -210,9 +210,11 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     polish : int
         ``method="multistart"``: the most designs of the polish of the best feasible design found
         (:mod:`~impactbar.physical.optimize_polish`: SLSQP with the implicit function theorem's
-        gradients from it), besides ``max_evaluations``; its design is reported where a fresh orbit
-        confirms it feasible and better, and certified as SLSQP's (the active set within 1e-4, no
-        step of COBYLA's); 0: no polish.
+        gradients from it), besides ``max_evaluations``; it stops earlier at its first iterate that
+        is the best design so far and meets the first-order conditions (the certificate's
+        :data:`~impactbar.physical.optimality.KKT_TOLERANCE`); its design is reported where a fresh
+        orbit confirms it feasible and better, and certified as SLSQP's (the active set within 1e-4,
+        no step of COBYLA's); 0: no polish.
     start : {"feasible", "any"}
         Whether the config's design, the search's start, must meet the constraints (``"feasible"``,
         else a ``ValueError``) or may miss them (``"any"``: COBYLA and SLSQP move towards the

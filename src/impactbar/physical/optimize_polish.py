@@ -17,6 +17,14 @@ follow back across the border. The design it returns is the best feasible design
 only where it is better than the start (a design without an orbit, or one that misses a constraint,
 is never returned), so a polish that fails, as at a border of the operating point where its line
 search backtracks, leaves the start.
+
+The polish stops where it has what it is for: at an iterate that is the best feasible design so far
+and whose gradients (those SLSQP asks for there) meet the first-order conditions to
+:data:`~impactbar.physical.optimality.KKT_TOLERANCE` (:func:`~impactbar.physical.optimality.certify`,
+the search's active set at its resolution 0). SLSQP's own stop (its ``ftol`` on the objective) can
+come many designs later, or never within the budget, and a budget that ends the polish elsewhere
+leaves the design's certificate to where the budget happened to fall: the same search on another
+platform's floating point (other last bits in SLSQP's iterates) then ended "stopped at a budget".
 :func:`~impactbar.physical.optimize_drifter` then reports it only where a fresh orbit confirms it
 feasible and no worse than the search's best (its ranking of the designs evaluated).
 """
@@ -34,8 +42,12 @@ class _Spent(Exception):
     """The polish's budget of designs used up (SLSQP cannot be stopped by its callbacks)."""
 
 
+class _Stationary(Exception):
+    """The best design so far meets the first-order conditions (the polish is done)."""
+
+
 def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-10,
-           feasibility: float = 1e-8, border=None, existence=None, d_existence=None):
+           feasibility: float = 1e-8, border=None, existence=None, d_existence=None, stationary=None):
     r"""SLSQP from the design ``u``, the objective maximised under the margins, with given gradients;
     the best feasible design it visits if better than ``u``.
 
@@ -66,13 +78,21 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
         and its gradient (:func:`~impactbar.physical.optimize_border.existence_gradient`), given to
         SLSQP after the margins (met where :math:`\ge 0`; not counted in the returned design's
         feasibility, as it is met at every design with an orbit); both or neither.
+    stationary : callable, optional
+        ``(u, objective_gradient (n,), margin_gradients (m, n)) -> float or None``: the design's KKT
+        residual (:func:`~impactbar.physical.optimality.certify`) where it is at most the tolerance,
+        ``None`` otherwise. Asked at each of SLSQP's iterates that is the best feasible design so far,
+        with the gradients SLSQP asks for there; the polish stops at the first one it certifies.
+        ``None``: the polish stops where SLSQP does, or at ``designs``.
 
     Returns
     -------
     scipy.optimize.OptimizeResult
         ``x`` the design returned (``u`` where no design visited is better), ``fun`` its objective,
         ``improved`` whether it is not ``u``, ``nfev`` the designs evaluated, ``nit`` SLSQP's
-        iterations, ``message`` SLSQP's (or that the budget was spent), ``success`` SLSQP's.
+        iterations, ``message`` SLSQP's (or that the budget was spent, or that the design returned is
+        stationary), ``success`` SLSQP's (true where ``stationary`` stopped it), ``residual`` the KKT
+        residual ``stationary`` gave (``None`` where it did not stop the polish).
 
     Raises
     ------
@@ -142,7 +162,10 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
 
     def df(v):  # the objective's gradient, scaled as f
         point, _ = visit(v)
-        d_objective, _ = gradients(point)
+        d_objective, d_margins = gradients(point)
+        if (stationary is not None and best["improved"] and point.tobytes() == best["x"].tobytes()
+                and (residual := stationary(point, d_objective, d_margins)) is not None):
+            raise _Stationary(residual)  # (SLSQP asks for the gradients at each new iterate)
         return -d_objective / ref
 
     def dg(v):
@@ -158,17 +181,22 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
         with single_threaded_blas():
             res = minimize(f, u, jac=df, method="SLSQP", constraints=[{"type": "ineq", "fun": g, "jac": dg}],
                            bounds=[(0.0, 1.0)] * u.size, options={"ftol": ftol, "maxiter": 10 * designs})
-        message, success, nit = str(res.message), bool(res.success), int(res.nit)
+        message, success, nit, residual = str(res.message), bool(res.success), int(res.nit), None
     except _Spent:
-        message, success, nit = f"the polish's limit reached ({designs} designs)", False, -1
+        message, success, nit, residual = f"the polish's limit reached ({designs} designs)", False, -1, None
+    except _Stationary as done:
+        residual = float(done.args[0])
+        message, success, nit = f"stationary: the best design's KKT residual {residual:.3g}", True, -1
     return OptimizeResult(x=best["x"], fun=best["fun"], improved=best["improved"], nfev=len(seen) - 1,
-                          nit=nit, message=message, success=success)
+                          nit=nit, message=message, success=success, residual=residual)
 
 
 def polish_search(evaluate, margins, gradients, history: list, points: dict, fkey: str, *, designs: int,
-                  ftol: float, border=None, existence=None, d_existence=None):
+                  ftol: float, border=None, existence=None, d_existence=None, tolerance: float | None = None):
     """:func:`polish` from the best feasible design of a search
-    (:func:`~impactbar.physical.optimize_drifter`'s).
+    (:func:`~impactbar.physical.optimize_drifter`'s), stopped at the first iterate whose record and
+    gradients :func:`~impactbar.physical.optimality.certify` finds stationary (the reported design's
+    certificate, at the search's resolution 0).
 
     Parameters
     ----------
@@ -188,20 +216,40 @@ def polish_search(evaluate, margins, gradients, history: list, points: dict, fke
         SLSQP's tolerance (:func:`polish`).
     border, existence, d_existence : callable, optional
         The search's border model and existence constraint (:func:`polish`'s).
+    tolerance : float, optional
+        The largest KKT residual at which the polish stops (default
+        :data:`~impactbar.physical.optimality.KKT_TOLERANCE`, the certificate's); 0: never before SLSQP
+        or the budget does.
 
     Returns
     -------
     scipy.optimize.OptimizeResult
         :func:`polish`'s, with ``summary``: a line for the search's message.
+
+    Raises
+    ------
+    ValueError
+        ``tolerance`` negative or not finite, or as :func:`polish`.
     """
+    from .optimality import KKT_TOLERANCE, certify
+
+    tolerance = KKT_TOLERANCE if tolerance is None else tolerance
+    if not (isinstance(tolerance, int | float) and np.isfinite(tolerance) and tolerance >= 0.0):
+        raise ValueError(f"tolerance must be a finite number >= 0 (the KKT residual); got {tolerance!r}")
     top = max((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey])
 
     def objective(v):
         rec = evaluate(v)
         return rec["objectives"][fkey] if rec["ok"] else None
 
+    def stationary(v, d_objective, d_margins):  # (the reported design's certificate, its verdict aside)
+        rec = evaluate(v)
+        residual = certify(d_objective, d_margins, rec, v, [str(i) for i in range(v.size)],
+                           method="polish").residual
+        return residual if residual <= tolerance else None
+
     res = polish(objective, margins, gradients, points[top["id"]], designs=designs, ftol=ftol, border=border,
-                 existence=existence, d_existence=d_existence)
+                 existence=existence, d_existence=d_existence, stationary=stationary if tolerance else None)
     gain = f"{fkey} {top['objectives'][fkey]:.6g} -> {res.fun:.6g}" if res.improved else "no better design"
     res.summary = (f"polished from the best design (SLSQP, the implicit function theorem's gradients): "
                    f"{res.nfev} designs, {gain} ({res.message})")
