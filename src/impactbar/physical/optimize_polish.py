@@ -234,7 +234,8 @@ def polish_search(evaluate, margins, gradients, history: list, points: dict, fke
     from .optimality import KKT_TOLERANCE, certify
 
     tolerance = KKT_TOLERANCE if tolerance is None else tolerance
-    if not (isinstance(tolerance, int | float) and np.isfinite(tolerance) and tolerance >= 0.0):
+    if not (isinstance(tolerance, int | float) and not isinstance(tolerance, bool) and np.isfinite(tolerance)
+            and tolerance >= 0.0):
         raise ValueError(f"tolerance must be a finite number >= 0 (the KKT residual); got {tolerance!r}")
     top = max((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey])
 
