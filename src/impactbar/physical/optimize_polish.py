@@ -43,7 +43,12 @@ class _Spent(Exception):
 
 
 class _Stationary(Exception):
-    """The best design so far meets the first-order conditions (the polish is done)."""
+    """The best design so far meets the first-order conditions (the polish is done); ``residual`` its
+    KKT residual."""
+
+    def __init__(self, residual: float):
+        super().__init__(residual)
+        self.residual = float(residual)
 
 
 def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-10,
@@ -185,7 +190,7 @@ def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-1
     except _Spent:
         message, success, nit, residual = f"the polish's limit reached ({designs} designs)", False, -1, None
     except _Stationary as done:
-        residual = float(done.args[0])
+        residual = done.residual
         message, success, nit = f"stationary: the best design's KKT residual {residual:.3g}", True, -1
     return OptimizeResult(x=best["x"], fun=best["fun"], improved=best["improved"], nfev=len(seen) - 1,
                           nit=nit, message=message, success=success, residual=residual)
