@@ -316,7 +316,7 @@ def test_the_polish_stops_at_the_first_best_iterate_that_is_certified():
     form's to the accuracy that residual implies; a tolerance that no iterate meets leaves SLSQP's
     path and stop unchanged (the same designs to the bit)."""
     from impactbar.physical.optimality import stopped_at_budget
-    from impactbar.physical.optimize_polish import polish
+    from impactbar.physical.optimize_polish import polish, polish_search
 
     objective, margins, gradients, record = _disc()
     u = np.array([0.44, 0.89])
@@ -339,8 +339,6 @@ def test_the_polish_stops_at_the_first_best_iterate_that_is_certified():
     assert all(objective(v) <= early.fun for v in asked)  # (asked at best iterates alone)
     never = polish(objective, margins, gradients, u, designs=60, stationary=stationary(-1.0))
     assert never.residual is None and np.array_equal(never.x, full.x) and never.nfev == full.nfev
-    from impactbar.physical.optimize_polish import polish_search
-
     for bad in (-1e-3, float("nan"), float("inf"), True, "0.01"):
         with pytest.raises(ValueError, match=r"^tolerance must be a finite number >= 0"):
             polish_search(None, None, None, [], {}, "f", designs=10, ftol=1e-9, tolerance=bad)
