@@ -1,0 +1,390 @@
+r"""Probe: a lattice whose steps carry the blow's events inside them ("slots"), against the exact blow
+and the library's lattice, on ``examples/circuit_drifter_rock.toml``'s rod from the orbit's second
+arrival (``bench_coupled_exact.arrival()``) with the drive's force held at the arrival's.
+
+Why. The library's lattice (:func:`impactbar.laws.rodrock.blow._python_loop`, compiled as
+``_rockloop.blow_loop``) holds one value of each characteristic in each cell. A piston-shank
+re-contact, the bit's landing or a rock branch change inside a step sends a front into the rod or the
+piston that starts inside a cell; the cell averages cannot say where, so the next switch that front
+causes is found at a step's end again, and the blow converges at first order, not monotonically
+(``probes/lattice_order.py``).
+
+What is tried here. Every wave travels one cell a step, so a front that starts a fraction ``a`` into
+a step stays that fraction into every step it reaches. Each step is cut into *slots* (fractions of
+the step, the same cuts for every cell), and each cell holds one value of each characteristic per
+slot: the waves are piecewise constant between the events' instants, exactly. A slot is processed
+as a step of its own length: the welded junctions, the piston's driven end (the drive's force of
+the step), the bit over the slot's time under its constant input (its outgoing wave the slot's
+average). An event inside a slot (the gap closing, linear in time under constant waves; the bit's
+first branch change, the rock's loading, unloading, the bit's lift-off or landing) cuts that slot,
+and the cut is made in every cell, so the new front keeps its position for good. Separations need
+no cut: the welded force is constant over a slot, so the contact opens at a slot's start. The cuts
+are capped (``--max-slots``): past the cap the two adjacent slots of smallest total width are
+merged, their values averaged by width. A rod segment whose travel time is not whole steps
+("segments delayed") is tried as its whole cells and a delay of the fraction ``delta`` of a step at
+its far end: the delayed waves' slot averages exact (each slot's integral), the cuts moved by
+``delta`` added each step so that they stay exact until the cap merges them.
+
+Measured on the exact blow of the same rod (``method="exact"``) over the same fixed window
+(``blow_time``, whole steps at every cell count), with the rod's segments rounded to whole cells as
+the lattice rounds them ("rounded rod": the event error alone) and as given ("true rod"): the
+piston's velocity ``v_after[0]`` and displacement ``q_after[0]`` after the blow, and the work
+dissipated in the rock (``work``). Library behaviour is not changed: the slot loop is put in the
+place of the numpy reference loop for the probe's calls only (``use_reference("rock.blow")``).
+
+Measured on 0abc7a7d (``--cells 8 16 32 64 128 --delays-up-to 32``, 48 slots at most, the window 14
+piston travel times), the piston's velocity after the blow, relative to the exact blow's:
+
+| cells | rounded rod: step | inside | slots | true rod: step | inside | slots | slots, delayed |
+| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
+| 8 | 1.7e-2 | -1.4e-2 | 1.7e-3 | 5.3e-3 | -2.6e-2 | -1.0e-2 | 1.5e-3 |
+| 16 | 3.0e-3 | -1.1e-3 | -9.0e-5 | -1.4e-2 | -1.8e-2 | -1.7e-2 | 9.9e-4 |
+| 32 | 1.1e-2 | -1.4e-4 | -3.0e-7 | 2.9e-2 | 1.8e-2 | 1.8e-2 | 7.1e-4 |
+| 64 | 4.5e-3 | -9.8e-5 | 8.3e-6 | 3.4e-3 | -1.2e-3 | -1.0e-3 | - |
+| 128 | 1.8e-3 | -2.5e-5 | 3.5e-6 | 7.5e-4 | -1.1e-3 | -1.1e-3 | - |
+
+(the piston's displacement after the blow alike; the work dissipated in the rock is the same in the
+three lattices, 5.7e-8 to 2e-10 on the rounded rod, 1.7e-6 to 1.1e-7 on the true rod). So:
+
+- the events inside the steps, held as slots, take out the error the events make: on the rounded
+  rod the slots are 7 to 460 times closer to the exact blow than the library's lattice located
+  inside its steps (``contact_events="inside"``), with 9 or 10 cuts a blow (10 slots a step at
+  most: that many times the lattice's work a step; the probe's loop is numpy, 0.04 to 0.73 s, and
+  its cost was not compared with a compiled one);
+- on the rod as given they change nothing: its segments rounded to whole cells (travel times 1.9 %
+  off on 8 and 16 cells, 1.6 % on 32, 0.13 % on 64 and 128) make the error, 1e-2 to 1e-3, at first
+  order or worse;
+- the delayed segments bring it to 1.5e-3, 9.9e-4, 7.1e-4 (order 0.5), their loop taking 3.6, 18
+  and 123 s against the slots' 0.04, 0.08 and 0.16 s without delays (both numpy, the same run):
+  each delay moves every cut, the cap is reached within some steps and the merges (31,000 to 490,000
+  a blow) smear the fronts again. A rod with incommensurate travel times has ever more distinct
+  fronts, in the exact blow as here (its cost); a lattice that converges at second order on it has
+  to smear them in a centred way (a delay's linear interpolation: second order, but a large
+  constant, ``probes/lattice_order.py``), or hold them all.
+
+Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
+[--delays-up-to N]`` (some 5 minutes with the delayed segments up to 32 cells).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # (bench_coupled_exact: the arrival)
+
+#: a cut closer than this fraction of a slot to one of its ends is not made (the event is taken there)
+TINY = 1e-12
+STATS = {"cuts": 0, "merges": 0, "slots": 0}
+
+
+def _bit_advance(bit, E, T):
+    """Advance ``bit`` under ``E`` for at most ``T`` up to its first branch change that takes time:
+    the time advanced (``T`` when none comes first)."""
+    done = 0.0
+    for _ in range(64):
+        left = T - done
+        if left <= 0.0:
+            break
+        tau = bit._substep_massless(E, left) if bit.m == 0.0 else bit._substep_mass(E, left)
+        if tau == 0.0:
+            continue  # a switch at once (unloading, loading again): go on on the new branch
+        done += tau
+        if tau < left:
+            return done
+    return T
+
+
+def _integral(edges, values, at):
+    """The integral from 0 of the piecewise-constant signal ``values`` on ``edges`` at ``at``."""
+    cum = np.concatenate(([0.0], np.cumsum(values * np.diff(edges))))
+    return np.interp(at, edges, cum)
+
+
+def _delayed(prev, W_prev, cur, W, delta, target):
+    """The slot averages on the slots ``target`` (widths, summing to 1) of a signal delayed by
+    ``delta`` (a fraction of a step): over ``[0, delta)`` the last ``delta`` of the previous step's
+    signal ``prev`` (on ``W_prev``), over ``[delta, 1)`` the first ``1 - delta`` of this step's
+    ``cur`` (on ``W``); exact (each slot's integral)."""
+    ep = np.concatenate(([0.0], np.cumsum(W_prev))) + delta - 1.0
+    ec = np.concatenate(([0.0], np.cumsum(W))) + delta
+    edges = np.concatenate((ep, ec[1:]))
+    values = np.concatenate((prev, cur))
+    et = np.concatenate(([0.0], np.cumsum(target)))
+    et[-1] = 1.0
+    return np.diff(_integral(edges, values, et)) / target
+
+
+def _cuts(W, W_prev, delays):
+    """The slots' cuts this step needs for the delays to be exact: every cut of ``W`` and
+    ``W_prev`` moved by each delay, modulo a step."""
+    c = np.concatenate(([0.0], np.cumsum(W)[:-1]))
+    cp = np.concatenate(([0.0], np.cumsum(W_prev)[:-1]))
+    new = [c]
+    for _, d in delays:
+        new.append(np.mod(c + d, 1.0))
+        new.append(np.mod(cp + d, 1.0))
+    return np.unique(np.concatenate(new))
+
+
+def _refine(W, arrays, cuts):
+    """The slots ``W`` cut at ``cuts`` (positions in ``[0, 1)``), each array's columns (slots) copied
+    into the pieces: ``(W, arrays)``."""
+    edges = np.concatenate(([0.0], np.cumsum(W)))
+    edges[-1] = 1.0
+    new = np.unique(np.concatenate((edges, cuts)))
+    keep = np.concatenate(([True], np.diff(new) > 1e-13))
+    new = new[keep]
+    if new[-1] < 1.0:
+        new[-1] = 1.0
+    if new.size == edges.size:
+        return W, arrays
+    mid = 0.5 * (new[:-1] + new[1:])
+    idx = np.minimum(np.searchsorted(edges, mid, side="right") - 1, W.size - 1)
+    return np.diff(new), [x[..., idx] for x in arrays]
+
+
+def _merge(W, arrays, cap):
+    """The adjacent slots of least total width merged (their values averaged by width) until at most
+    ``cap`` are left."""
+    arrays = [x.copy() for x in arrays]
+    while W.size > cap:
+        i = int(np.argmin(W[:-1] + W[1:]))
+        w = W[i] + W[i + 1]
+        for x in arrays:
+            x[..., i] = (x[..., i] * W[i] + x[..., i + 1] * W[i + 1]) / w
+        arrays = [np.delete(x, i + 1, axis=-1) for x in arrays]
+        W = np.concatenate((W[:i], [w], W[i + 2:]))
+        STATS["merges"] += 1
+    return W, arrays
+
+
+def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field, locate=False,
+              max_slots=48, delays=()):
+    """The blow's loop with slots (the module's text), the signature and results of
+    ``blow._python_loop`` (``record_field`` and ``locate`` unused). ``delays``: ``(i, delta)``, the
+    rod's segment ``i`` (0: the shank) longer than its whole cells by ``delta`` of a step's travel,
+    a delay at its far end (before the next segment, or the bit)."""
+    Za, Zb = Z[:-1], Z[1:]
+    wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
+    n_p, m, feed = int(bounds[0]), bit.m, bit.f
+    nc = Z.size
+    jc = n_p - 1
+    ends = list(bounds[1:] - 1) + [nc - 1]  # each rod segment's last cell
+    D = [(int(ends[i]), float(d)) for i, d in delays if d > 0.0]
+    nd = len(D)
+    FF, GG = np.array(F, dtype=float)[:, None].copy(), np.array(G, dtype=float)[:, None].copy()
+    W = np.array([1.0])
+    # each delay's sources over the step before: the cell's F, the wave sent back into the cell
+    srcF = np.array([[FF[j, 0]] for j, _ in D]).reshape(nd, 1)
+    srcG = np.array([[GG[j, 0]] for j, _ in D]).reshape(nd, 1)
+    W_src = W.copy()
+    gap = float(gap0)
+    contact = gap <= 0.0
+    u_shank, grid_loss, work = 0.0, 0.0, 0.0
+    last = 0 if contact else -1
+    junc, bitf, pen = [], [bit.force()], [bit.p]
+    ended = "t_max"
+    for step in range(n_max):
+        if nd:
+            W, (FF, GG) = _refine(W, [FF, GG], _cuts(W, W_src, D))
+        Fd = np.array([_delayed(srcF[i], W_src, FF[j], W, d, W)
+                       for i, (j, d) in enumerate(D)]).reshape(nd, W.size)
+        Gout = np.zeros((nd, W.size))
+        Fn, Gn = np.empty_like(FF), np.empty_like(GG)
+        jrow = np.zeros(bounds.size)
+        pd = drive[step]
+        k = 0
+        while k < W.size:
+            Fs = FF[:, k].copy()
+            for i, (j, _) in enumerate(D):
+                Fs[j] = Fd[i, k]
+            fa, ga = Fs[jc], GG[jc + 1, k]
+            N = wa * Fs[:-1] + wb * GG[1:, k]
+            nw = N[jc]
+            if contact and nw < 0.0:
+                contact = False  # the welded force pulls: apart from the slot's start
+            elif not contact and gap <= 0.0 and nw >= 0.0:
+                contact = True
+            # the first event inside the slot: the gap closing, the bit's branch change
+            tau = W[k] * dt
+            cut, closes = 1.0, False
+            rate = -2.0 * ga / Zb[jc] - 2.0 * fa / Za[jc]
+            if not contact and rate < 0.0 and gap + rate * tau < 0.0:
+                cut, closes = -gap / (rate * tau), True
+            Fi = Fs[-1]
+            trial = copy.copy(bit)
+            adv = _bit_advance(trial, 2.0 * Fi + feed, tau) / tau
+            if adv < cut:
+                cut, closes = adv, False
+            if TINY < cut < 1.0 - TINY:
+                W = np.concatenate((W[:k], [W[k] * cut, W[k] * (1.0 - cut)], W[k + 1:]))
+                FF, GG, Fn, Gn, Fd, Gout = (np.insert(x, k + 1, x[:, k], axis=1)
+                                            for x in (FF, GG, Fn, Gn, Fd, Gout))
+                STATS["cuts"] += 1
+                tau = W[k] * dt
+            if contact:
+                N[jc] = nw
+            else:
+                N[jc] = 0.0
+                gap = 0.0 if closes else max(gap + rate * tau, 0.0)
+            Fn[1:, k] = N - GG[1:, k]
+            Gn[:-1, k] = N - Fs[:-1]
+            Fn[0, k] = pd - GG[0, k]
+            work += pd * (pd - 2.0 * GG[0, k]) / Z[0] * tau
+            p0, w0, ke0 = bit.p, bit.work, 0.5 * m * bit.w * bit.w
+            bit.step(2.0 * Fi + feed, tau)
+            g_avg = Fi - Z[-1] * (bit.p - p0) / tau
+            Gn[-1, k] = g_avg
+            for i, (j, _) in enumerate(D):
+                Gout[i, k] = Gn[j, k]
+            e_in = (bit.work - w0) - feed * (bit.p - p0) + 0.5 * m * bit.w * bit.w - ke0
+            grid_loss += (Fi * Fi - g_avg * g_avg) * tau / Z[-1] - e_in
+            u_shank += (Fn[jc + 1, k] - GG[jc + 1, k]) / Zb[jc] * tau
+            jrow += N[bounds - 1] * W[k]
+            k += 1
+        for i, (j, d) in enumerate(D):  # the waves sent back through each delay
+            Gn[j] = _delayed(srcG[i], W_src, Gout[i], W, d, W)
+        srcF = np.array([FF[j] for j, _ in D]).reshape(nd, W.size)
+        srcG, W_src = Gout, W.copy()
+        W, (Fn, Gn) = _merge(W, [Fn, Gn], max_slots)
+        STATS["slots"] = max(STATS["slots"], W.size)
+        junc.append(jrow)
+        bitf.append(bit.force())
+        pen.append(bit.p)
+        FF, GG = Fn, Gn
+        if contact:
+            last = step
+        elif last < 0:
+            pass
+        elif quiet > 0 and step - last >= quiet:
+            ended = "separated"
+            break
+        if not contact and last >= 0 and step % 8 == 0:
+            rod_e = float(np.sum((FF[n_p:] ** 2 + GG[n_p:] ** 2) @ W / Z[n_p:])) * dt
+            if rod_e + 0.5 * m * bit.w * bit.w < stop:
+                ended = "energy"
+                break
+    F_out, G_out = FF @ W, GG @ W  # the cells' averages
+    junc = np.array(junc).reshape(-1, bounds.size)
+    return (F_out, G_out, junc, np.array(bitf), np.array(pen), np.array([]),
+            (u_shank, grid_loss, ended, gap, work))
+
+
+def _floored_rod(model, cells):
+    """The model on the rod whose segments are their whole cells of the lattice of ``cells`` (at
+    least one), and each segment's travel left over, in steps: ``(model, [(i, delta), ...])``."""
+    law = model.law
+    dt = 1.0 / (model.s * cells)
+    segs, delays = [], []
+    for i, g in enumerate(law.segments):
+        T = g.travel_time(model)
+        whole = max(1, int(np.floor(T / dt + 1e-9)))
+        delays.append((i, max(T / dt - whole, 0.0)))
+        segs.append(dataclasses.replace(g, length=g.length * whole * dt / T))
+    return model.with_(impact=dataclasses.replace(law, segments=tuple(segs))), delays
+
+
+def _rounded_rod(model, cells):
+    """The model on the rod whose segments are whole cells of the lattice of ``cells``."""
+    law = model.law
+    dt = 1.0 / (model.s * cells)
+    segs = tuple(dataclasses.replace(g, length=g.length * max(1, round(g.travel_time(model) / dt)) * dt
+                                     / g.travel_time(model)) for g in law.segments)
+    return model.with_(impact=dataclasses.replace(law, segments=segs))
+
+
+def _blow(model, load, q, v, method, window, cells=None, loop=None, events="step"):
+    """``(v_after[0], q_after[0], work dissipated in the rock, CPU s)`` of the held-force blow."""
+    from impactbar.dynamics.implementations import use_reference
+    from impactbar.laws.rodrock import blow as B
+
+    extra = {} if cells is None else {"cells_per_piston": cells, "contact_events": events}
+    law = dataclasses.replace(model.law, method=method, blow_time=window, **extra)
+    m = model.with_(impact=law)
+    t = time.process_time()
+    if loop is None:
+        qa, va, _, rec = law.contact(m, load, 0.0, q, v)
+    else:
+        plain = B._python_loop
+        B._python_loop = loop
+        try:
+            with use_reference("rock.blow"):
+                qa, va, _, rec = law.contact(m, load, 0.0, q, v)
+        finally:
+            B._python_loop = plain
+    cpu = time.process_time() - t
+    b = rec.blow
+    return float(va[0]), float(qa[0]), float(b.work_on_rock - b.rock_stored_energy
+                                             if hasattr(b, "rock_stored_energy") else b.work_on_rock), cpu
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cells", type=int, nargs="*", default=[8, 16, 32, 64, 128])
+    ap.add_argument("--max-slots", type=int, default=48)
+    ap.add_argument("--window", type=float, default=14.0, help="the blow's window in piston travel times")
+    ap.add_argument("--delays-up-to", type=int, default=16,
+                    help="the delayed segments' slots only up to this many cells (their cost grows fast)")
+    args = ap.parse_args(argv)
+
+    from bench_coupled_exact import arrival
+
+    from impactbar import FourierLoad
+
+    model, drive, state, _, q, v = arrival()
+    load = FourierLoad(drive.force(state.mode, state.z, q, v), [])
+    window = args.window / model.s
+
+    names = ("v_after", "q_after", "work")
+    rows = {}
+    for rod in ("rounded", "true"):
+        print(f"\n{rod} rod: relative differences from the exact blow of that rod, v_after[0] q_after[0] "
+              "work, and the CPU s of the lattice's blow")
+        head = f"{'cells':>5s} | {'lattice, step':>38s} | {'lattice, inside':>38s} | {'slots':>38s}"
+        if rod == "true":
+            head += f" | {'slots, segments delayed':>38s} {'slots':>5s} {'cuts':>5s} {'merges':>7s}"
+        print(head)
+        for n in args.cells:
+            mdl = _rounded_rod(model, n) if rod == "rounded" else model
+            ref = _blow(mdl, load, q, v, "exact", window)
+
+            def plain_slots(*a, **k):
+                return slot_loop(*a, **k, max_slots=args.max_slots)
+
+            cases = [("step", mdl, None), ("inside", mdl, None), ("slots", mdl, plain_slots)]
+            if rod == "true" and n <= args.delays_up_to:
+                floored, delays = _floored_rod(model, n)
+
+                def delayed_slots(*a, _d=tuple(delays), **k):
+                    return slot_loop(*a, **k, max_slots=args.max_slots, delays=_d)
+
+                cases.append(("delayed", floored, delayed_slots))
+            out = []
+            for name, m_, loop in cases:
+                STATS.update(cuts=0, merges=0, slots=0)
+                events = "inside" if name == "inside" else "step"
+                got = _blow(m_, load, q, v, "lattice", window, n, loop, events)
+                err = [(g - r) / abs(r) for g, r in zip(got[:3], ref[:3], strict=True)]
+                rows.setdefault((rod, name), []).append(err)
+                out.append(" ".join(f"{e:10.2e}" for e in err) + f" {got[3]:6.2f}")
+            line = f"{n:5d} | " + " | ".join(f"{o:>38s}" for o in out)
+            if len(out) > 3:
+                line += f" {STATS['slots']:5d} {STATS['cuts']:5d} {STATS['merges']:7d}"
+            print(line)
+    print("\nobserved orders log2(e(n)/e(2n))")
+    for (rod, name), e in rows.items():
+        e = np.abs(np.array(e))
+        for j, q_name in enumerate(names):
+            o = np.log2(e[:-1, j] / e[1:, j])
+            print(f"{rod:8s} {name:8s} {q_name:8s} " + " ".join(f"{x:6.2f}" for x in o))
+
+
+if __name__ == "__main__":
+    main()
