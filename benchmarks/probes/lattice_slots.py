@@ -19,51 +19,44 @@ average). An event inside a slot (the gap closing, linear in time under constant
 first branch change, the rock's loading, unloading, the bit's lift-off or landing) cuts that slot,
 and the cut is made in every cell, so the new front keeps its position for good. Separations need
 no cut: the welded force is constant over a slot, so the contact opens at a slot's start. The cuts
-are capped (``--max-slots``): past the cap the two adjacent slots of smallest total width are
-merged, their values averaged by width. A rod segment whose travel time is not whole steps
-("segments delayed") is tried as its whole cells and a delay of the fraction ``delta`` of a step at
-its far end: the delayed waves' slot averages exact (each slot's integral), the cuts moved by
-``delta`` added each step so that they stay exact until the cap merges them.
+are capped (``--max-slots``, default 12): past the cap two adjacent slots are merged, their values
+averaged by width, the pair whose average loses least (the L2 difference of their values over the
+cells times ``w_1 w_2 / (w_1 + w_2)``; ``--merge narrow``: the pair of least width). A rod segment
+whose travel time is not whole steps ("segments delayed") is its whole cells and a delay of the
+fraction ``delta`` of a step at its far end: the delayed waves' slot averages exact (each slot's
+integral), the slots cut where the delayed waves have an edge (``--cut-jump F``: only where they
+jump by more than ``F`` of the largest wave), so that they stay exact until a merge.
 
-Measured on the exact blow of the same rod (``method="exact"``) over the same fixed window
-(``blow_time``, whole steps at every cell count), with the rod's segments rounded to whole cells as
-the lattice rounds them ("rounded rod": the event error alone) and as given ("true rod"): the
-piston's velocity ``v_after[0]`` and displacement ``q_after[0]`` after the blow, and the work
-dissipated in the rock (``work``). Library behaviour is not changed: the slot loop is put in the
-place of the numpy reference loop for the probe's calls only (``use_reference("rock.blow")``).
-
-Measured on 0abc7a7d (``--cells 8 16 32 64 128 --delays-up-to 32``, 48 slots at most, the window 14
-piston travel times), the piston's velocity after the blow, relative to the exact blow's:
+Measured on 0abc7a7d (``--cells 8 16 32 64 128 --delays-up-to 32``, the window 14 piston travel
+times, one process), the piston's velocity after the blow relative to the exact blow's:
 
 | cells | rounded rod: step | inside | slots | true rod: step | inside | slots | slots, delayed |
 | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
-| 8 | 1.7e-2 | -1.4e-2 | 1.7e-3 | 5.3e-3 | -2.6e-2 | -1.0e-2 | 1.5e-3 |
-| 16 | 3.0e-3 | -1.1e-3 | -9.0e-5 | -1.4e-2 | -1.8e-2 | -1.7e-2 | 9.9e-4 |
-| 32 | 1.1e-2 | -1.4e-4 | -3.0e-7 | 2.9e-2 | 1.8e-2 | 1.8e-2 | 7.1e-4 |
-| 64 | 4.5e-3 | -9.8e-5 | 8.3e-6 | 3.4e-3 | -1.2e-3 | -1.0e-3 | - |
-| 128 | 1.8e-3 | -2.5e-5 | 3.5e-6 | 7.5e-4 | -1.1e-3 | -1.1e-3 | - |
+| 8 | 1.7e-2 | -1.4e-2 | 1.7e-3 | 5.3e-3 | -2.6e-2 | -1.0e-2 | 1.3e-5 |
+| 16 | 3.0e-3 | -1.1e-3 | -9.0e-5 | -1.4e-2 | -1.8e-2 | -1.7e-2 | -4.3e-7 |
+| 32 | 1.1e-2 | -1.4e-4 | -3.0e-7 | 2.9e-2 | 1.8e-2 | 1.8e-2 | 3.6e-7 |
+| 64 | 4.5e-3 | -9.8e-5 | 8.3e-6 | 3.4e-3 | -1.2e-3 | -1.0e-3 | not run |
+| 128 | 1.8e-3 | -2.5e-5 | 3.5e-6 | 7.5e-4 | -1.1e-3 | -1.1e-3 | not run |
 
-(the piston's displacement after the blow alike; the work dissipated in the rock is the same in the
-three lattices, 5.7e-8 to 2e-10 on the rounded rod, 1.7e-6 to 1.1e-7 on the true rod). So:
+The piston's displacement after the blow moves alike (with the delays 4.6e-5, 4.4e-6, 5.4e-6); the
+work dissipated in the rock is the same in the three lattices without delays (5.7e-8 to 2e-10 on
+the rounded rod, 1.7e-6 to 1.1e-7 on the true rod), with them -1.45e-6, -4.1e-7, -3.0e-8. So:
 
 - the events inside the steps, held as slots, take out the error the events make: on the rounded
-  rod the slots are 7 to 460 times closer to the exact blow than the library's lattice located
-  inside its steps (``contact_events="inside"``), with 9 or 10 cuts a blow (10 slots a step at
-  most: that many times the lattice's work a step; the probe's loop is numpy, 0.04 to 0.73 s, and
-  its cost was not compared with a compiled one);
-- on the rod as given they change nothing: its segments rounded to whole cells (travel times 1.9 %
-  off on 8 and 16 cells, 1.6 % on 32, 0.13 % on 64 and 128) make the error, 1e-2 to 1e-3, at first
-  order or worse;
-- the delayed segments bring it to 1.5e-3, 9.9e-4, 7.1e-4 (order 0.5), their loop taking 3.6, 18
-  and 123 s against the slots' 0.04, 0.08 and 0.16 s without delays (both numpy, the same run):
-  each delay moves every cut, the cap is reached within some steps and the merges (31,000 to 490,000
-  a blow) smear the fronts again. A rod with incommensurate travel times has ever more distinct
-  fronts, in the exact blow as here (its cost); a lattice that converges at second order on it has
-  to smear them in a centred way (a delay's linear interpolation: second order, but a large
-  constant, ``probes/lattice_order.py``), or hold them all.
+  rod the slots are 7 to 460 times closer to the exact blow than ``contact_events="inside"``, with
+  9 or 10 cuts a blow (at most 10 slots a step);
+- on the rod as given they change nothing: its segments rounded to whole cells (their travel times
+  1.9 % off on 8 and 16 cells, 1.6 % on 32, 0.13 % on 64 and 128) make the error;
+- the segments delayed bring the true rod to the rounded rod's accuracy and past it, 1.3e-5 on 8
+  cells, but at a cost: every edge a delay moves is a cut, and 3,358, 104,263 and 995,312 merges a
+  blow take the numpy loop to 0.40, 12 and 345 s (the slots without delays: 0.04, 0.08, 0.16 s).
+  Merging the narrowest pair instead (``--merge narrow``, 48 slots) smears the fronts: 1.3e-4 and
+  8.7e-4 on 8 and 16 cells. Cutting only where a delayed wave jumps by 1e-3 of the largest (``--cut-jump
+  1e-3``, 12 slots): 3.5e-5 and 1.7e-5 on 8 and 16 cells, 552 and 1,211 merges, 0.17 and 0.35 s.
 
 Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
-[--delays-up-to N]`` (some 5 minutes with the delayed segments up to 32 cells).
+[--delays-up-to N] [--merge loss|narrow] [--cut-jump F]`` (some 6 minutes with the delayed
+segments up to 32 cells, nearly all of it theirs on 32).
 """
 
 from __future__ import annotations
@@ -82,6 +75,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # (bench_coupled_e
 #: a cut closer than this fraction of a slot to one of its ends is not made (the event is taken there)
 TINY = 1e-12
 STATS = {"cuts": 0, "merges": 0, "slots": 0}
+#: a delay cuts the slots where the wave it delays jumps by more than this fraction of the largest
+#: wave (< 0: at every edge)
+CUT_JUMP = -1.0
+#: which adjacent slots a merge takes: "narrow" (the pair of least width) or "loss" (least L2 loss)
+MERGE = "loss"
 
 
 def _bit_advance(bit, E, T):
@@ -121,16 +119,17 @@ def _delayed(prev, W_prev, cur, W, delta, target):
     return np.diff(_integral(edges, values, et)) / target
 
 
-def _cuts(W, W_prev, delays):
-    """The slots' cuts this step needs for the delays to be exact: every cut of ``W`` and
-    ``W_prev`` moved by each delay, modulo a step."""
-    c = np.concatenate(([0.0], np.cumsum(W)[:-1]))
-    cp = np.concatenate(([0.0], np.cumsum(W_prev)[:-1]))
-    new = [c]
-    for _, d in delays:
-        new.append(np.mod(c + d, 1.0))
-        new.append(np.mod(cp + d, 1.0))
-    return np.unique(np.concatenate(new))
+def _jump_cuts(prev, W_prev, cur, W, delta, thr):
+    """Where the signal delayed by ``delta`` (:func:`_delayed`'s) jumps by more than ``thr``: the
+    jumps of ``prev`` moved by ``delta - 1``, of ``cur`` by ``delta``, and ``delta`` itself (the
+    step's boundary) where ``cur`` starts apart from where ``prev`` ended (``thr < 0``: every
+    edge)."""
+    ep = np.cumsum(W_prev)[:-1][np.abs(np.diff(prev)) > thr] + delta - 1.0
+    ec = np.cumsum(W)[:-1][np.abs(np.diff(cur)) > thr] + delta
+    out = [ep[ep > 0.0], ec[ec < 1.0]]
+    if abs(cur[0] - prev[-1]) > thr and 0.0 < delta < 1.0:
+        out.append([delta])
+    return np.concatenate(out)
 
 
 def _refine(W, arrays, cuts):
@@ -154,6 +153,32 @@ def _merge(W, arrays, cap):
     """The adjacent slots of least total width merged (their values averaged by width) until at most
     ``cap`` are left."""
     arrays = [x.copy() for x in arrays]
+    if MERGE == "loss" and W.size > cap:
+        # the pair whose average loses least (its L2 error over the cells), one at a time, the
+        # losses of the merged slot's two pairs computed again
+        X = np.concatenate(arrays, axis=0)  # (rows, slots)
+        W = W.copy()
+
+        def pair_loss(i):
+            d = X[:, i + 1] - X[:, i]
+            return float(d @ d) * W[i] * W[i + 1] / (W[i] + W[i + 1])
+
+        loss = np.array([pair_loss(i) for i in range(W.size - 1)])
+        while W.size > cap:
+            i = int(np.argmin(loss))
+            w = W[i] + W[i + 1]
+            X[:, i] = (X[:, i] * W[i] + X[:, i + 1] * W[i + 1]) / w
+            W[i] = w
+            X = np.delete(X, i + 1, axis=1)
+            W = np.delete(W, i + 1)
+            loss = np.delete(loss, i)
+            if i < W.size - 1:
+                loss[i] = pair_loss(i)
+            if i > 0:
+                loss[i - 1] = pair_loss(i - 1)
+            STATS["merges"] += 1
+        rows = np.cumsum([0] + [x.shape[0] for x in arrays])
+        arrays = [X[rows[j]:rows[j + 1]] for j in range(len(arrays))]
     while W.size > cap:
         i = int(np.argmin(W[:-1] + W[1:]))
         w = W[i] + W[i + 1]
@@ -193,7 +218,11 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
     ended = "t_max"
     for step in range(n_max):
         if nd:
-            W, (FF, GG) = _refine(W, [FF, GG], _cuts(W, W_src, D))
+            thr = CUT_JUMP * max(float(np.abs(FF).max()), float(np.abs(GG).max()), 1e-300)
+            if CUT_JUMP < 0.0:
+                thr = -1.0
+            cuts = [_jump_cuts(srcF[i], W_src, FF[j], W, d, thr) for i, (j, d) in enumerate(D)]
+            W, (FF, GG) = _refine(W, [FF, GG], np.concatenate(cuts))
         Fd = np.array([_delayed(srcF[i], W_src, FF[j], W, d, W)
                        for i, (j, d) in enumerate(D)]).reshape(nd, W.size)
         Gout = np.zeros((nd, W.size))
@@ -249,7 +278,12 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
             u_shank += (Fn[jc + 1, k] - GG[jc + 1, k]) / Zb[jc] * tau
             jrow += N[bounds - 1] * W[k]
             k += 1
-        for i, (j, d) in enumerate(D):  # the waves sent back through each delay
+        if nd:  # the waves sent back through each delay, on slots cut where they jump
+            thr = -1.0 if CUT_JUMP < 0.0 else CUT_JUMP * max(float(np.abs(Gout).max()), 1e-300)
+            cuts = np.concatenate([_jump_cuts(srcG[i], W_src, Gout[i], W, d, thr)
+                                   for i, (_, d) in enumerate(D)])
+            W, (FF, Fn, Gn, Gout) = _refine(W, [FF, Fn, Gn, Gout], cuts)
+        for i, (j, d) in enumerate(D):
             Gn[j] = _delayed(srcG[i], W_src, Gout[i], W, d, W)
         srcF = np.array([FF[j] for j, _ in D]).reshape(nd, W.size)
         srcG, W_src = Gout, W.copy()
@@ -328,11 +362,15 @@ def _blow(model, load, q, v, method, window, cells=None, loop=None, events="step
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cells", type=int, nargs="*", default=[8, 16, 32, 64, 128])
-    ap.add_argument("--max-slots", type=int, default=48)
+    ap.add_argument("--max-slots", type=int, default=12)
     ap.add_argument("--window", type=float, default=14.0, help="the blow's window in piston travel times")
     ap.add_argument("--delays-up-to", type=int, default=16,
                     help="the delayed segments' slots only up to this many cells (their cost grows fast)")
+    ap.add_argument("--merge", choices=("narrow", "loss"), default="loss")
+    ap.add_argument("--cut-jump", type=float, default=-1.0)
     args = ap.parse_args(argv)
+    global MERGE, CUT_JUMP
+    MERGE, CUT_JUMP = args.merge, args.cut_jump
 
     from bench_coupled_exact import arrival
 
