@@ -51,8 +51,10 @@ the rounded rod, 1.7e-6 to 1.1e-7 on the true rod), with them -1.45e-6, -4.1e-7,
   cells, but at a cost: every edge a delay moves is a cut, and 3,358, 104,263 and 995,312 merges a
   blow take the numpy loop to 0.40, 12 and 345 s (the slots without delays: 0.04, 0.08, 0.16 s).
   Merging the narrowest pair instead (``--merge narrow``, 48 slots) smears the fronts: 1.3e-4 and
-  8.7e-4 on 8 and 16 cells. Cutting only where a delayed wave jumps by 1e-3 of the largest (``--cut-jump
-  1e-3``, 12 slots): 3.5e-5 and 1.7e-5 on 8 and 16 cells, 552 and 1,211 merges, 0.17 and 0.35 s.
+  8.7e-4 on 8 and 16 cells. Cutting only where a delayed wave jumps by 1e-4 of the largest
+  (``--cut-jump 1e-4``, 12 slots): 3.5e-5, 7.9e-6, 4.1e-6 on 8, 16, 32 cells, 593, 1,403 and 2,752
+  merges, 0.17, 0.37 and 0.75 s; by 1e-3 or 1e-6 the same 3.5e-5 on 8 cells, nor do 2 or 4 equal
+  slots a step at least (``--sub``) move it: what every edge's cut adds there was not traced.
 
 Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
 [--delays-up-to N] [--merge loss|narrow] [--cut-jump F]`` (some 6 minutes with the delayed
@@ -78,6 +80,8 @@ STATS = {"cuts": 0, "merges": 0, "slots": 0}
 #: a delay cuts the slots where the wave it delays jumps by more than this fraction of the largest
 #: wave (< 0: at every edge)
 CUT_JUMP = -1.0
+#: each step of the delayed segments' loop cut into at least this many equal slots
+SUB = 1
 #: which adjacent slots a merge takes: "narrow" (the pair of least width) or "loss" (least L2 loss)
 MERGE = "loss"
 
@@ -222,6 +226,7 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
             if CUT_JUMP < 0.0:
                 thr = -1.0
             cuts = [_jump_cuts(srcF[i], W_src, FF[j], W, d, thr) for i, (j, d) in enumerate(D)]
+            cuts.append(np.arange(1, SUB) / SUB)
             W, (FF, GG) = _refine(W, [FF, GG], np.concatenate(cuts))
         Fd = np.array([_delayed(srcF[i], W_src, FF[j], W, d, W)
                        for i, (j, d) in enumerate(D)]).reshape(nd, W.size)
@@ -368,9 +373,11 @@ def main(argv=None) -> None:
                     help="the delayed segments' slots only up to this many cells (their cost grows fast)")
     ap.add_argument("--merge", choices=("narrow", "loss"), default="loss")
     ap.add_argument("--cut-jump", type=float, default=-1.0)
+    ap.add_argument("--sub", type=int, default=1,
+                    help="the delayed segments' loop: equal slots a step at least")
     args = ap.parse_args(argv)
-    global MERGE, CUT_JUMP
-    MERGE, CUT_JUMP = args.merge, args.cut_jump
+    global MERGE, CUT_JUMP, SUB
+    MERGE, CUT_JUMP, SUB = args.merge, args.cut_jump, args.sub
 
     from bench_coupled_exact import arrival
 
