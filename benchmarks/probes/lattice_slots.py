@@ -340,7 +340,7 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
 # a heap (its ties to the leftmost pair, as ``np.argmin``) on a linked list of the slots, the merged
 # slots compacted once at the end.
 
-_KMAX = {"last": 0}  # the largest Kmax a blow needed (the next one starts there)
+_KMAX: dict = {}  # the Kmax a blow of these cells, delays and rules needed (the next one starts there)
 
 
 @numba.njit(cache=False, nogil=True)
@@ -877,7 +877,7 @@ def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive
                        locate=False, max_slots=48, delays=()):
     """:func:`slot_loop` compiled (:func:`_slot_kernel`): the same signature and results (``MERGE``,
     ``CUT_JUMP``, ``SUB`` read here). Runs again with twice the slots where ``Kmax`` (from
-    ``4 max_slots + 64``, or the most a blow needed before) was too few."""
+    ``4 max_slots + 64``, or what a blow of the same cells, delays and rules needed before) was too few."""
     from impactbar.laws.rodrock import blow as B
 
     Z = np.ascontiguousarray(Z, dtype=float)
@@ -888,7 +888,8 @@ def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive
     dj = np.array([j for j, _ in D], dtype=np.int64)
     dd = np.array([d for _, d in D], dtype=float)
     drive = np.ascontiguousarray(drive, dtype=float)
-    Kmax = max(4 * max_slots + 64, _KMAX["last"])
+    key = (nc, dj.size, max_slots, MERGE, CUT_JUMP, SUB)
+    Kmax = _KMAX.get(key, 4 * max_slots + 64)
     while True:
         bs, bp = B._bit_records(bit)
         FF = np.zeros((Kmax, nc))
@@ -906,7 +907,7 @@ def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive
         if rc == 0:
             break
         Kmax *= 2
-    _KMAX["last"] = max(_KMAX["last"], Kmax)
+    _KMAX[key] = Kmax
     bit.p, bit.w, bit.branch = bs[BIT_P], bs[BIT_W], int(bs[BIT_BRANCH])
     bit.p_max, bit.R_max = bs[BIT_PMAX], bs[BIT_RMAX]
     bit.p_perm, bit.work = bs[BIT_PPERM], bs[BIT_WORK]
