@@ -56,9 +56,31 @@ the rounded rod, 1.7e-6 to 1.1e-7 on the true rod), with them -1.45e-6, -4.1e-7,
   merges, 0.17, 0.37 and 0.75 s; by 1e-3 or 1e-6 the same 3.5e-5 on 8 cells, nor do 2 or 4 equal
   slots a step at least (``--sub``) move it: what every edge's cut adds there was not traced.
 
+Compiled. :func:`slot_loop_compiled` is the same loop in numba (the slots rows of preallocated
+arrays, the bit ``_rockloop``'s kernels, the merge by least loss from a heap on a linked list of the
+slots). Measured on 10e8756b (``--compiled --cells 8 16 32 --delays-up-to 32``, one process, the
+machine's 2 cores shared with a test run, load 3 to 3.5): its ``v_after``, ``q_after`` and work
+are the numpy loop's bit for bit (relative difference 0.0 in all nine cases, the 995,312 merges on
+32 cells included), and the CPU ms of one blow (``law.contact``, best of 5 after a warm-up):
+
+| cells | library lattice, step | slots | slots, delayed, every edge | slots, delayed, jump 1e-4 |
+| ---: | ---: | ---: | ---: | ---: |
+| 8 | 0.37 | 0.77 | 6.07 | 2.22 |
+| 16 | 0.43 | 1.08 | 234 | 5.19 |
+| 32 | 0.60 | 1.92 | 3,137 | 13.6 |
+
+(the numpy loop: 0.05, 0.08, 0.17 s; 0.42, 12.3, 350 s; 0.17, 0.37, 0.76 s). The loops alone, timed
+apart the same way (the blow's set-up and record, some 0.3 ms, left out): the library's 0.09, 0.15,
+0.31 ms, the slots 0.41, 0.75, 1.55 ms (4.4 to 5 times: some 10 slots a step, each a step of the
+lattice and two calls of the bit), delayed with the jump rule 1.9, 4.7, 13.2 ms (20 to 43 times).
+With cuts at every edge the cost is the slots before each merge, 12 plus the merges a step: some 42,
+480 and 2,230 on 8, 16 and 32 cells a piston (36, 72, 144 cells in all), each merge a pass over
+every cell: 16, 540 and 5,200 times the library's blow.
+
 Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
-[--delays-up-to N] [--merge loss|narrow] [--cut-jump F]`` (some 6 minutes with the delayed
-segments up to 32 cells, nearly all of it theirs on 32).
+[--delays-up-to N] [--merge loss|narrow] [--cut-jump F] [--compiled]`` (some 6 minutes with the
+delayed segments up to 32 cells, nearly all of it theirs on 32; ``--compiled`` as long, nearly all
+of it the numpy loop's check with cuts at every edge on 32 cells).
 """
 
 from __future__ import annotations
@@ -70,7 +92,23 @@ import sys
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
+
+from impactbar.laws.rodrock._records import (
+    BIT_BRANCH,
+    BIT_P,
+    BIT_PMAX,
+    BIT_PPERM,
+    BIT_RMAX,
+    BIT_W,
+    BIT_WORK,
+    BITP_FEED,
+    BITP_K,
+    BITP_KU,
+    BITP_MASS,
+)
+from impactbar.laws.rodrock._rockloop import _massless, _with_mass, bit_step
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # (bench_coupled_exact: the arrival)
 
@@ -316,6 +354,594 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
             (u_shank, grid_loss, ended, gap, work))
 
 
+# -- the slot loop compiled ----------------------------------------------------------------------------
+# The same loop as :func:`slot_loop`, step for step the same arithmetic, on preallocated arrays: the
+# slots are rows (``FF[k, j]``: slot ``k`` of cell ``j``), at most ``Kmax`` of them before a merge; the
+# bit is ``_rockloop``'s (its state ``bs``, parameters ``bp``), its first event inside a slot the time
+# ``_massless``/``_with_mass`` advance on a copy of ``bs``. The merge by least loss takes the pairs from
+# a heap (its ties to the leftmost pair, as ``np.argmin``) on a linked list of the slots, the merged
+# slots compacted once at the end.
+
+_KMAX: dict = {}  # the Kmax a blow of these cells, delays and rules needed (the next one starts there)
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_advance(bs, trial, bp, E, T):
+    """:func:`_bit_advance` on a copy ``trial`` of the bit's state ``bs``."""
+    for r in range(bs.size):
+        trial[r] = bs[r]
+    done = 0.0
+    for _ in range(64):
+        left = T - done
+        if left <= 0.0:
+            break
+        if bp[BITP_MASS] == 0.0:
+            tau = _massless(trial, bp, E, left)
+        else:
+            tau = _with_mass(trial, bp, E, left)
+        if tau == 0.0:
+            continue
+        done += tau
+        if tau < left:
+            return done
+    return T
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_force(bs, bp):
+    """``_Bit.force``."""
+    if bs[BIT_BRANCH] == 0.0:
+        return bp[BITP_K] * bs[BIT_P]
+    if bs[BIT_BRANCH] == 1.0:
+        return max(bp[BITP_KU] * (bs[BIT_P] - bs[BIT_PPERM]), 0.0)
+    return 0.0
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_delayed(prev, Wp, nWp, cur, W, nW, delta, edges, cum, out):
+    """:func:`_delayed` with ``target = W``: ``out[:nW]`` (``np.interp``'s arithmetic)."""
+    c = 0.0
+    edges[0] = (0.0 + delta) - 1.0
+    for m in range(nWp):
+        c += Wp[m]
+        edges[m + 1] = (c + delta) - 1.0
+    c = 0.0
+    for m in range(nW):
+        c += W[m]
+        edges[nWp + 1 + m] = c + delta
+    ne = nWp + nW + 1
+    cum[0] = 0.0
+    s = 0.0
+    for m in range(ne - 1):
+        v = prev[m] if m < nWp else cur[m - nWp]
+        s += v * (edges[m + 1] - edges[m])
+        cum[m + 1] = s
+    j = 0
+    lo = 0.0
+    c = 0.0
+    for m in range(nW + 1):
+        if m == 0:
+            x = 0.0
+        elif m == nW:
+            x = 1.0
+        else:
+            c += W[m - 1]
+            x = c
+        if x > edges[ne - 1]:
+            val = cum[ne - 1]
+        elif x < edges[0]:
+            val = cum[0]
+        else:
+            while j + 1 < ne and edges[j + 1] <= x:
+                j += 1
+            if j == ne - 1 or edges[j] == x:
+                val = cum[j]
+            else:
+                slope = (cum[j + 1] - cum[j]) / (edges[j + 1] - edges[j])
+                val = slope * (x - edges[j]) + cum[j]
+        if m > 0:
+            out[m - 1] = (val - lo) / W[m - 1]
+        lo = val
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_jump_cuts(prev, Wp, nWp, cur, W, nW, delta, thr, cuts, nc):
+    """:func:`_jump_cuts` appended to ``cuts[nc:]``: the new count."""
+    c = 0.0
+    for m in range(nWp - 1):
+        c += Wp[m]
+        if abs(prev[m + 1] - prev[m]) > thr:
+            e = (c + delta) - 1.0
+            if e > 0.0:
+                cuts[nc] = e
+                nc += 1
+    c = 0.0
+    for m in range(nW - 1):
+        c += W[m]
+        if abs(cur[m + 1] - cur[m]) > thr:
+            e = c + delta
+            if e < 1.0:
+                cuts[nc] = e
+                nc += 1
+    if abs(cur[0] - prev[nWp - 1]) > thr and 0.0 < delta < 1.0:
+        cuts[nc] = delta
+        nc += 1
+    return nc
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_refine(W, nW, cuts, ncut, eold, ubuf, idx):
+    """:func:`_refine`'s new slots: ``W`` rewritten, ``idx[:n]`` each new slot's old one; the new count
+    ``n`` (``nW``: unchanged)."""
+    c = 0.0
+    eold[0] = 0.0
+    for m in range(nW):
+        c += W[m]
+        eold[m + 1] = c
+    eold[nW] = 1.0
+    n = nW + 1 + ncut
+    for m in range(nW + 1):
+        ubuf[m] = eold[m]
+    for m in range(ncut):
+        ubuf[nW + 1 + m] = cuts[m]
+    srt = np.sort(ubuf[:n])
+    # np.unique, then the kept ones: a difference from the previous unique value above 1e-13
+    nn = 1
+    ubuf[0] = srt[0]
+    prev_u = srt[0]
+    for m in range(1, n):
+        u = srt[m]
+        if u != prev_u:
+            if u - prev_u > 1e-13:
+                ubuf[nn] = u
+                nn += 1
+            prev_u = u
+    if ubuf[nn - 1] < 1.0:
+        ubuf[nn - 1] = 1.0
+    if nn == nW + 1:
+        return nW
+    i = 0
+    for m in range(nn - 1):
+        mid = 0.5 * (ubuf[m] + ubuf[m + 1])
+        while i + 1 <= nW and eold[i + 1] <= mid:
+            i += 1
+        idx[m] = min(i, nW - 1)
+    for m in range(nn - 1):
+        W[m] = ubuf[m + 1] - ubuf[m]
+    return nn - 1
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_gather(x, idx, n, tmp):
+    """``x[:n] = x[idx[:n]]`` (rows)."""
+    for m in range(n):
+        for j in range(x.shape[1]):
+            tmp[m, j] = x[idx[m], j]
+    for m in range(n):
+        for j in range(x.shape[1]):
+            x[m, j] = tmp[m, j]
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_insert(x, k, nW):
+    """A copy of row ``k`` inserted after it (rows ``k + 1 .. nW - 1`` moved down one)."""
+    for m in range(nW, k, -1):
+        for j in range(x.shape[1]):
+            x[m, j] = x[m - 1, j]
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_pair_loss(Fn, Gn, W, a, b):
+    d2 = 0.0
+    for j in range(Fn.shape[1]):
+        d = Fn[b, j] - Fn[a, j]
+        d2 += d * d
+    for j in range(Gn.shape[1]):
+        d = Gn[b, j] - Gn[a, j]
+        d2 += d * d
+    return d2 * W[a] * W[b] / (W[a] + W[b])
+
+
+@numba.njit(cache=False, nogil=True)
+def _heap_less(hk, hi, a, b):
+    return hk[a] < hk[b] or (hk[a] == hk[b] and hi[a] < hi[b])
+
+
+@numba.njit(cache=False, nogil=True)
+def _heap_push(hk, hi, hv, n, key, i, v):
+    hk[n], hi[n], hv[n] = key, i, v
+    c = n
+    while c > 0:
+        p = (c - 1) // 2
+        if _heap_less(hk, hi, c, p):
+            hk[c], hk[p] = hk[p], hk[c]
+            hi[c], hi[p] = hi[p], hi[c]
+            hv[c], hv[p] = hv[p], hv[c]
+            c = p
+        else:
+            break
+    return n + 1
+
+
+@numba.njit(cache=False, nogil=True)
+def _heap_pop(hk, hi, hv, n):
+    """The root removed: the new count (the root's entry left at ``n - 1``)."""
+    n -= 1
+    hk[0], hk[n] = hk[n], hk[0]
+    hi[0], hi[n] = hi[n], hi[0]
+    hv[0], hv[n] = hv[n], hv[0]
+    c = 0
+    while True:
+        lft, rgt, s = 2 * c + 1, 2 * c + 2, c
+        if lft < n and _heap_less(hk, hi, lft, s):
+            s = lft
+        if rgt < n and _heap_less(hk, hi, rgt, s):
+            s = rgt
+        if s == c:
+            break
+        hk[c], hk[s] = hk[s], hk[c]
+        hi[c], hi[s] = hi[s], hi[c]
+        hv[c], hv[s] = hv[s], hv[c]
+        c = s
+    return n
+
+
+@numba.njit(cache=False, nogil=True)
+def _nb_merge(W, nW, Fn, Gn, cap, merge_loss, nxt, prv, ver, hk, hi, hv):
+    """:func:`_merge` of ``Fn``, ``Gn`` (rows ``:nW``): the new count and the merges made."""
+    if nW <= cap:
+        return nW, 0
+    merges = 0
+    if merge_loss:
+        for i in range(nW):
+            nxt[i] = i + 1 if i + 1 < nW else -1
+            prv[i] = i - 1
+            ver[i] = 0
+        nh = 0
+        for i in range(nW - 1):
+            nh = _heap_push(hk, hi, hv, nh, _nb_pair_loss(Fn, Gn, W, i, i + 1), i, 0)
+        n = nW
+        while n > cap:
+            nh = _heap_pop(hk, hi, hv, nh)
+            i, v = hi[nh], hv[nh]
+            if v != ver[i] or nxt[i] < 0:
+                continue  # a stale entry (its pair changed, or its left slot merged away: ver < 0)
+            j = nxt[i]
+            w = W[i] + W[j]
+            for c in range(Fn.shape[1]):
+                Fn[i, c] = (Fn[i, c] * W[i] + Fn[j, c] * W[j]) / w
+            for c in range(Gn.shape[1]):
+                Gn[i, c] = (Gn[i, c] * W[i] + Gn[j, c] * W[j]) / w
+            W[i] = w
+            nxt[i] = nxt[j]
+            if nxt[j] >= 0:
+                prv[nxt[j]] = i
+            ver[j] = -1
+            n -= 1
+            merges += 1
+            ver[i] += 1
+            if nxt[i] >= 0:
+                nh = _heap_push(hk, hi, hv, nh, _nb_pair_loss(Fn, Gn, W, i, nxt[i]), i, ver[i])
+            if prv[i] >= 0:
+                a = prv[i]
+                ver[a] += 1
+                nh = _heap_push(hk, hi, hv, nh, _nb_pair_loss(Fn, Gn, W, a, i), a, ver[a])
+        pos, i = 0, 0
+        while i >= 0:
+            if i != pos:
+                W[pos] = W[i]
+                for c in range(Fn.shape[1]):
+                    Fn[pos, c] = Fn[i, c]
+                for c in range(Gn.shape[1]):
+                    Gn[pos, c] = Gn[i, c]
+            pos += 1
+            i = nxt[i]
+        return n, merges
+    n = nW
+    while n > cap:
+        i, best = 0, W[0] + W[1]
+        for m in range(1, n - 1):
+            if W[m] + W[m + 1] < best:
+                i, best = m, W[m] + W[m + 1]
+        w = W[i] + W[i + 1]
+        for c in range(Fn.shape[1]):
+            Fn[i, c] = (Fn[i, c] * W[i] + Fn[i + 1, c] * W[i + 1]) / w
+        for c in range(Gn.shape[1]):
+            Gn[i, c] = (Gn[i, c] * W[i] + Gn[i + 1, c] * W[i + 1]) / w
+        W[i] = w
+        for m in range(i + 1, n - 1):
+            W[m] = W[m + 1]
+            for c in range(Fn.shape[1]):
+                Fn[m, c] = Fn[m + 1, c]
+            for c in range(Gn.shape[1]):
+                Gn[m, c] = Gn[m + 1, c]
+        n -= 1
+        merges += 1
+    return n, merges
+
+
+@numba.njit(cache=False, nogil=True)
+def _slot_kernel(FF, GG, Z, bounds, dj, dd, bs, bp, dt, n_max, stop, quiet, gap0, drive, cap,
+                 merge_loss, cut_jump, sub, junc, bitf, pen, F_out, G_out, acc, stats):
+    """:func:`slot_loop`'s loop: ``FF``, ``GG`` ``(Kmax, cells)``, their first row the start's waves;
+    ``dj``, ``dd`` the delays' cells and fractions; out ``junc``, ``bitf``, ``pen``, ``F_out``,
+    ``G_out`` (the cells' averages), ``acc``: ``u_shank, grid_loss, steps, ended (0 t_max, 1 energy,
+    2 separated), gap, work``, ``stats``: ``cuts, merges, slots``. Returns 0, or 1 where ``Kmax``
+    slots are too few (then nothing is valid)."""
+    Kmax, nc = FF.shape
+    nd = dj.size
+    nb = bounds.size
+    n_p = bounds[0]
+    jc = n_p - 1
+    m_bit, feed = bp[BITP_MASS], bp[BITP_FEED]
+    wa = np.empty(nc - 1)
+    wb = np.empty(nc - 1)
+    for j in range(nc - 1):
+        wa[j] = 2.0 * Z[j + 1] / (Z[j] + Z[j + 1])
+        wb[j] = 2.0 * Z[j] / (Z[j] + Z[j + 1])
+    Fn = np.empty((Kmax, nc))
+    Gn = np.empty((Kmax, nc))
+    tmp = np.empty((Kmax, nc))
+    Fd = np.empty((Kmax, max(nd, 1)))
+    Gout = np.empty((Kmax, max(nd, 1)))
+    srcF = np.empty((Kmax, max(nd, 1)))
+    srcG = np.empty((Kmax, max(nd, 1)))
+    W = np.empty(Kmax)
+    Wsrc = np.empty(Kmax)
+    ncut_max = max(nd, 1) * (2 * Kmax + 1) + sub
+    cuts = np.empty(ncut_max)
+    eold = np.empty(Kmax + 1)
+    ubuf = np.empty(Kmax + 1 + ncut_max)
+    idx = np.empty(Kmax + 1 + ncut_max, dtype=np.int64)
+    edges = np.empty(2 * Kmax + 1)
+    cum = np.empty(2 * Kmax + 1)
+    col = np.empty(Kmax)
+    out = np.empty(Kmax)
+    Fs = np.empty(nc)
+    N = np.empty(nc - 1)
+    jrow = np.empty(nb)
+    trial = np.empty(bs.size)
+    nxt = np.empty(Kmax, dtype=np.int64)
+    prv = np.empty(Kmax, dtype=np.int64)
+    ver = np.empty(Kmax, dtype=np.int64)
+    hk = np.empty(3 * Kmax)
+    hi = np.empty(3 * Kmax, dtype=np.int64)
+    hv = np.empty(3 * Kmax, dtype=np.int64)
+    W[0] = 1.0
+    nW = 1
+    for i in range(nd):
+        srcF[0, i] = FF[0, dj[i]]
+        srcG[0, i] = GG[0, dj[i]]
+    Wsrc[0] = 1.0
+    nWs = 1
+    gap = gap0
+    contact = gap <= 0.0
+    u_shank, grid_loss, work = 0.0, 0.0, 0.0
+    last = 0 if contact else -1
+    bitf[0] = _nb_force(bs, bp)
+    pen[0] = bs[BIT_P]
+    steps, ended = n_max, 0.0
+    n_cuts, n_merges, n_slots = 0, 0, 0
+    for step in range(n_max):
+        if nd > 0:
+            thr = -1.0
+            if cut_jump >= 0.0:
+                big = 0.0
+                for k in range(nW):
+                    for j in range(nc):
+                        big = max(big, abs(FF[k, j]))
+                for k in range(nW):
+                    for j in range(nc):
+                        big = max(big, abs(GG[k, j]))
+                thr = cut_jump * max(big, 1e-300)
+            if nWs + nW + 1 > Kmax or nd * (nWs + nW + 1) + sub + nW + 1 > Kmax:
+                return 1
+            ncut = 0
+            for i in range(nd):
+                for k in range(nW):
+                    col[k] = FF[k, dj[i]]
+                ncut = _nb_jump_cuts(srcF[:, i], Wsrc, nWs, col, W, nW, dd[i], thr, cuts, ncut)
+            for r in range(1, sub):
+                cuts[ncut] = r / sub
+                ncut += 1
+            n_new = _nb_refine(W, nW, cuts, ncut, eold, ubuf, idx)
+            if n_new != nW:
+                _nb_gather(FF, idx, n_new, tmp)
+                _nb_gather(GG, idx, n_new, tmp)
+                nW = n_new
+        for i in range(nd):
+            for k in range(nW):
+                col[k] = FF[k, dj[i]]
+            _nb_delayed(srcF[:, i], Wsrc, nWs, col, W, nW, dd[i], edges, cum, out)
+            for k in range(nW):
+                Fd[k, i] = out[k]
+                Gout[k, i] = 0.0
+        for i in range(nb):
+            jrow[i] = 0.0
+        pd = drive[step]
+        k = 0
+        while k < nW:
+            for j in range(nc):
+                Fs[j] = FF[k, j]
+            for i in range(nd):
+                Fs[dj[i]] = Fd[k, i]
+            fa, ga = Fs[jc], GG[k, jc + 1]
+            for j in range(nc - 1):
+                N[j] = wa[j] * Fs[j] + wb[j] * GG[k, j + 1]
+            nw = N[jc]
+            if contact and nw < 0.0:
+                contact = False
+            elif not contact and gap <= 0.0 and nw >= 0.0:
+                contact = True
+            tau = W[k] * dt
+            cut, closes = 1.0, False
+            rate = -2.0 * ga / Z[jc + 1] - 2.0 * fa / Z[jc]
+            if not contact and rate < 0.0 and gap + rate * tau < 0.0:
+                cut, closes = -gap / (rate * tau), True
+            Fi = Fs[nc - 1]
+            adv = _nb_advance(bs, trial, bp, 2.0 * Fi + feed, tau) / tau
+            if adv < cut:
+                cut, closes = adv, False
+            if TINY < cut < 1.0 - TINY:
+                if nW + 1 > Kmax:
+                    return 1
+                for m in range(nW, k + 1, -1):
+                    W[m] = W[m - 1]
+                w_k = W[k]
+                W[k] = w_k * cut
+                W[k + 1] = w_k * (1.0 - cut)
+                _nb_insert(FF, k, nW)
+                _nb_insert(GG, k, nW)
+                _nb_insert(Fn, k, nW)
+                _nb_insert(Gn, k, nW)
+                _nb_insert(Fd, k, nW)
+                _nb_insert(Gout, k, nW)
+                nW += 1
+                n_cuts += 1
+                tau = W[k] * dt
+            if contact:
+                N[jc] = nw
+            else:
+                N[jc] = 0.0
+                gap = 0.0 if closes else max(gap + rate * tau, 0.0)
+            for j in range(nc - 1):
+                Fn[k, j + 1] = N[j] - GG[k, j + 1]
+                Gn[k, j] = N[j] - Fs[j]
+            Fn[k, 0] = pd - GG[k, 0]
+            work += pd * (pd - 2.0 * GG[k, 0]) / Z[0] * tau
+            p0, w0, ke0 = bs[BIT_P], bs[BIT_WORK], 0.5 * m_bit * bs[BIT_W] * bs[BIT_W]
+            bit_step(bs, bp, 2.0 * Fi + feed, tau)
+            g_avg = Fi - Z[nc - 1] * (bs[BIT_P] - p0) / tau
+            Gn[k, nc - 1] = g_avg
+            for i in range(nd):
+                Gout[k, i] = Gn[k, dj[i]]
+            e_in = (bs[BIT_WORK] - w0) - feed * (bs[BIT_P] - p0) + 0.5 * m_bit * bs[BIT_W] * bs[BIT_W] - ke0
+            grid_loss += (Fi * Fi - g_avg * g_avg) * tau / Z[nc - 1] - e_in
+            u_shank += (Fn[k, jc + 1] - GG[k, jc + 1]) / Z[jc + 1] * tau
+            for i in range(nb):
+                jrow[i] += N[bounds[i] - 1] * W[k]
+            k += 1
+        if nd > 0:
+            thr = -1.0
+            if cut_jump >= 0.0:
+                big = 0.0
+                for k in range(nW):
+                    for i in range(nd):
+                        big = max(big, abs(Gout[k, i]))
+                thr = cut_jump * max(big, 1e-300)
+            if nWs + nW + 1 > Kmax or nd * (nWs + nW + 1) + nW + 1 > Kmax:
+                return 1
+            ncut = 0
+            for i in range(nd):
+                for k in range(nW):
+                    col[k] = Gout[k, i]
+                ncut = _nb_jump_cuts(srcG[:, i], Wsrc, nWs, col, W, nW, dd[i], thr, cuts, ncut)
+            n_new = _nb_refine(W, nW, cuts, ncut, eold, ubuf, idx)
+            if n_new != nW:
+                _nb_gather(FF, idx, n_new, tmp)
+                _nb_gather(Fn, idx, n_new, tmp)
+                _nb_gather(Gn, idx, n_new, tmp)
+                _nb_gather(Gout, idx, n_new, tmp)
+                nW = n_new
+        for i in range(nd):
+            for k in range(nW):
+                col[k] = Gout[k, i]
+            _nb_delayed(srcG[:, i], Wsrc, nWs, col, W, nW, dd[i], edges, cum, out)
+            for k in range(nW):
+                Gn[k, dj[i]] = out[k]
+        for i in range(nd):
+            for k in range(nW):
+                srcF[k, i] = FF[k, dj[i]]
+                srcG[k, i] = Gout[k, i]
+        for k in range(nW):
+            Wsrc[k] = W[k]
+        nWs = nW
+        nW, mg = _nb_merge(W, nW, Fn, Gn, cap, merge_loss, nxt, prv, ver, hk, hi, hv)
+        n_merges += mg
+        n_slots = max(n_slots, nW)
+        for i in range(nb):
+            junc[step, i] = jrow[i]
+        bitf[step + 1] = _nb_force(bs, bp)
+        pen[step + 1] = bs[BIT_P]
+        for k in range(nW):
+            for j in range(nc):
+                FF[k, j] = Fn[k, j]
+                GG[k, j] = Gn[k, j]
+        if contact:
+            last = step
+        elif last < 0:
+            pass
+        elif quiet > 0 and step - last >= quiet:
+            steps, ended = step + 1, 2.0
+            break
+        if not contact and last >= 0 and step % 8 == 0:
+            rod_e = 0.0
+            for j in range(n_p, nc):
+                e = 0.0
+                for k in range(nW):
+                    e += (FF[k, j] ** 2 + GG[k, j] ** 2) * W[k]
+                rod_e += e / Z[j]
+            if rod_e * dt + 0.5 * m_bit * bs[BIT_W] * bs[BIT_W] < stop:
+                steps, ended = step + 1, 1.0
+                break
+    for j in range(nc):
+        f, g = 0.0, 0.0
+        for k in range(nW):
+            f += FF[k, j] * W[k]
+            g += GG[k, j] * W[k]
+        F_out[j], G_out[j] = f, g
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = u_shank, grid_loss, steps, ended, gap, work
+    stats[0], stats[1], stats[2] = n_cuts, n_merges, n_slots
+    return 0
+
+
+def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field,
+                       locate=False, max_slots=48, delays=()):
+    """:func:`slot_loop` compiled (:func:`_slot_kernel`): the same signature and results (``MERGE``,
+    ``CUT_JUMP``, ``SUB`` read here). Runs again with twice the slots where ``Kmax`` (from
+    ``4 max_slots + 64``, or what a blow of the same cells, delays and rules needed before) was too few."""
+    from impactbar.laws.rodrock import blow as B
+
+    Z = np.ascontiguousarray(Z, dtype=float)
+    bounds = np.asarray(bounds, dtype=np.int64)
+    nc = Z.size
+    ends = list(bounds[1:] - 1) + [nc - 1]
+    D = [(int(ends[i]), float(d)) for i, d in delays if d > 0.0]
+    dj = np.array([j for j, _ in D], dtype=np.int64)
+    dd = np.array([d for _, d in D], dtype=float)
+    drive = np.ascontiguousarray(drive, dtype=float)
+    key = (nc, dj.size, max_slots, MERGE, CUT_JUMP, SUB)
+    Kmax = _KMAX.get(key, 4 * max_slots + 64)
+    while True:
+        bs, bp = B._bit_records(bit)
+        FF = np.zeros((Kmax, nc))
+        GG = np.zeros((Kmax, nc))
+        FF[0], GG[0] = F, G
+        junc = np.zeros((n_max, bounds.size))
+        bitf = np.zeros(n_max + 1)
+        pen = np.zeros(n_max + 1)
+        F_out, G_out = np.zeros(nc), np.zeros(nc)
+        acc = np.zeros(6)
+        stats = np.zeros(3, dtype=np.int64)
+        rc = _slot_kernel(FF, GG, Z, bounds, dj, dd, bs, bp, float(dt), int(n_max), float(stop), int(quiet),
+                          float(gap0), drive, int(max_slots), MERGE == "loss", float(CUT_JUMP), int(SUB),
+                          junc, bitf, pen, F_out, G_out, acc, stats)
+        if rc == 0:
+            break
+        Kmax *= 2
+    _KMAX[key] = Kmax
+    bit.p, bit.w, bit.branch = bs[BIT_P], bs[BIT_W], int(bs[BIT_BRANCH])
+    bit.p_max, bit.R_max = bs[BIT_PMAX], bs[BIT_RMAX]
+    bit.p_perm, bit.work = bs[BIT_PPERM], bs[BIT_WORK]
+    STATS["cuts"] += int(stats[0])
+    STATS["merges"] += int(stats[1])
+    STATS["slots"] = max(STATS["slots"], int(stats[2]))
+    n = int(acc[2])
+    ended = ("t_max", "energy", "separated")[int(acc[3])]
+    return (F_out, G_out, junc[:n], bitf[:n + 1], pen[:n + 1], np.array([]),
+            (float(acc[0]), float(acc[1]), ended, float(acc[4]), float(acc[5])))
+
+
 def _floored_rod(model, cells):
     """The model on the rod whose segments are their whole cells of the lattice of ``cells`` (at
     least one), and each segment's travel left over, in steps: ``(model, [(i, delta), ...])``."""
@@ -364,6 +990,58 @@ def _blow(model, load, q, v, method, window, cells=None, loop=None, events="step
                                              if hasattr(b, "rock_stored_energy") else b.work_on_rock), cpu
 
 
+def _best_cpu(fn, repeats=5):
+    """The least CPU s of ``repeats`` calls of ``fn`` (returning ``_blow``'s tuple), after one call
+    not counted (the compile)."""
+    fn()
+    return min(fn()[3] for _ in range(repeats))
+
+
+def compiled_table(model, load, q, v, window, cells, max_slots, check_every_edge_up_to):
+    """The compiled slot loop against :func:`slot_loop` (the relative differences of ``v_after[0]``,
+    ``q_after[0]`` and the work, the numpy loop's CPU s of one run) and the CPU s of one blow (best
+    of 5 after a warm-up) of the library's lattice (``contact_events="step"``) and of the compiled
+    slots, without delays and with (cut at every edge, ``--cut-jump -1``, and where a wave jumps by
+    1e-4, ``--cut-jump 1e-4``), on the true rod. The numpy loop with cuts at every edge is checked
+    only up to ``check_every_edge_up_to`` cells (345 s a blow on 32)."""
+    global CUT_JUMP
+    saved = CUT_JUMP
+    print("\ncompiled slot loop on the true rod: relative differences from the numpy slot loop, "
+          "v_after[0] q_after[0] work, and the numpy loop's CPU s; CPU ms of one blow (best of 5)")
+    head = (f"{'cells':>5s} | {'slots':>35s} | {'delayed, every edge':>35s} | {'delayed, jump 1e-4':>35s} | "
+            f"{'step':>8s} {'slots':>8s} {'every':>8s} {'1e-4':>8s}")
+    print(head)
+    try:
+        for n in cells:
+            floored, delays = _floored_rod(model, n)
+            cases = [("slots", model, (), CUT_JUMP), ("every", floored, tuple(delays), -1.0),
+                     ("jump", floored, tuple(delays), 1e-4)]
+            diffs, cpus = [], []
+            for name, m_, d, cj in cases:
+                CUT_JUMP = cj
+
+                def nb(*a, _d=d, **k):
+                    return slot_loop_compiled(*a, **k, max_slots=max_slots, delays=_d)
+
+                def py(*a, _d=d, **k):
+                    return slot_loop(*a, **k, max_slots=max_slots, delays=_d)
+
+                got = _blow(m_, load, q, v, "lattice", window, n, nb)
+                if name == "every" and n > check_every_edge_up_to:
+                    diffs.append(f"{'not run':>35s}")
+                else:
+                    ref = _blow(m_, load, q, v, "lattice", window, n, py)
+                    rel = [abs(g - r) / abs(r) for g, r in zip(got[:3], ref[:3], strict=True)]
+                    diffs.append(" ".join(f"{e:8.1e}" for e in rel) + f" {ref[3]:8.2f}")
+                cpus.append(_best_cpu(lambda m_=m_, nb=nb, n=n: _blow(m_, load, q, v, "lattice", window, n,
+                                                                      nb)))
+            step = _best_cpu(lambda n=n: _blow(model, load, q, v, "lattice", window, n))
+            print(f"{n:5d} | " + " | ".join(diffs) + " | "
+                  + " ".join(f"{1e3 * c:8.2f}" for c in [step] + cpus), flush=True)
+    finally:
+        CUT_JUMP = saved
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cells", type=int, nargs="*", default=[8, 16, 32, 64, 128])
@@ -375,6 +1053,10 @@ def main(argv=None) -> None:
     ap.add_argument("--cut-jump", type=float, default=-1.0)
     ap.add_argument("--sub", type=int, default=1,
                     help="the delayed segments' loop: equal slots a step at least")
+    ap.add_argument("--compiled", action="store_true",
+                    help="only the compiled slot loop: its differences from the numpy loop and the CPU "
+                         "time of one blow (the numpy loop with cuts at every edge up to --delays-up-to "
+                         "cells)")
     args = ap.parse_args(argv)
     global MERGE, CUT_JUMP, SUB
     MERGE, CUT_JUMP, SUB = args.merge, args.cut_jump, args.sub
@@ -386,6 +1068,10 @@ def main(argv=None) -> None:
     model, drive, state, _, q, v = arrival()
     load = FourierLoad(drive.force(state.mode, state.z, q, v), [])
     window = args.window / model.s
+
+    if args.compiled:
+        compiled_table(model, load, q, v, window, args.cells, args.max_slots, args.delays_up_to)
+        return
 
     names = ("v_after", "q_after", "work")
     rows = {}
