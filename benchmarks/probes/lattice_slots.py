@@ -661,6 +661,16 @@ def _nb_merge(W, nW, Fn, Gn, cap, merge_loss, nxt, prv, ver, hk, hi, hv):
 
 
 @numba.njit(cache=False, nogil=True)
+def _nb_absmax(x, rows, cols):
+    """The largest ``|x[k, j]|`` over the first ``rows`` rows and ``cols`` columns (0 for none)."""
+    big = 0.0
+    for k in range(rows):
+        for j in range(cols):
+            big = max(big, abs(x[k, j]))
+    return big
+
+
+@numba.njit(cache=False, nogil=True)
 def _slot_kernel(FF, GG, Z, bounds, dj, dd, bs, bp, dt, n_max, stop, quiet, gap0, drive, cap,
                  merge_loss, cut_jump, sub, junc, bitf, pen, F_out, G_out, acc, stats):
     """:func:`slot_loop`'s loop: ``FF``, ``GG`` ``(Kmax, cells)``, their first row the start's waves;
@@ -726,13 +736,7 @@ def _slot_kernel(FF, GG, Z, bounds, dj, dd, bs, bp, dt, n_max, stop, quiet, gap0
         if nd > 0:
             thr = -1.0
             if cut_jump >= 0.0:
-                big = 0.0
-                for k in range(nW):
-                    for j in range(nc):
-                        big = max(big, abs(FF[k, j]))
-                for k in range(nW):
-                    for j in range(nc):
-                        big = max(big, abs(GG[k, j]))
+                big = max(_nb_absmax(FF, nW, nc), _nb_absmax(GG, nW, nc))
                 thr = cut_jump * max(big, 1e-300)
             if nWs + nW + 1 > Kmax or nd * (nWs + nW + 1) + sub + nW + 1 > Kmax:
                 return 1
@@ -824,11 +828,7 @@ def _slot_kernel(FF, GG, Z, bounds, dj, dd, bs, bp, dt, n_max, stop, quiet, gap0
         if nd > 0:
             thr = -1.0
             if cut_jump >= 0.0:
-                big = 0.0
-                for k in range(nW):
-                    for i in range(nd):
-                        big = max(big, abs(Gout[k, i]))
-                thr = cut_jump * max(big, 1e-300)
+                thr = cut_jump * max(_nb_absmax(Gout, nW, nd), 1e-300)
             if nWs + nW + 1 > Kmax or nd * (nWs + nW + 1) + nW + 1 > Kmax:
                 return 1
             ncut = 0
@@ -956,15 +956,6 @@ def _floored_rod(model, cells):
     return model.with_(impact=dataclasses.replace(law, segments=tuple(segs))), delays
 
 
-def _rounded_rod(model, cells):
-    """The model on the rod whose segments are whole cells of the lattice of ``cells``."""
-    law = model.law
-    dt = 1.0 / (model.s * cells)
-    segs = tuple(dataclasses.replace(g, length=g.length * max(1, round(g.travel_time(model) / dt)) * dt
-                                     / g.travel_time(model)) for g in law.segments)
-    return model.with_(impact=dataclasses.replace(law, segments=segs))
-
-
 def _blow(model, load, q, v, method, window, cells=None, loop=None, events="step"):
     """``(v_after[0], q_after[0], work dissipated in the rock, CPU s)`` of the held-force blow."""
     from impactbar.dynamics.implementations import use_reference
@@ -1062,6 +1053,7 @@ def main(argv=None) -> None:
     MERGE, CUT_JUMP, SUB = args.merge, args.cut_jump, args.sub
 
     from bench_coupled_exact import arrival
+    from lattice_order import _rounded_rod  # (this folder's: the rod the lattice solves)
 
     from impactbar import FourierLoad
 
