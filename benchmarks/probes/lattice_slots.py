@@ -87,7 +87,7 @@ and 32 times), the slots without delays 0.81, 1.13 and 1.96 ms, the compiled and
 the same (at most 1.3e-16 apart).
 
 With the rod 1.1 m long (``--set "rod.segments.1.length=1.1 m"``: no travel time a multiple of
-another), the jump rule 1e-4, on 8 and 16 cells: the library's lattice -1.2e-2 and -7.7e-3, the
+another), the jump rule 1e-4, 12 slots, on 8 and 16 cells: the library's lattice -1.2e-2 and -7.7e-3, the
 slots alone -2.3e-2 and -1.9e-2, slots and delayed segments 3.0e-5 and 1.7e-5.
 
 Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
