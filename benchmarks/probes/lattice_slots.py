@@ -86,12 +86,28 @@ delayed slots take 3.2, 7.2 and 19.3 ms a blow against the library's 0.38, 0.43 
 and 32 times), the slots without delays 0.81, 1.13 and 1.96 ms, the compiled and numpy loops again
 the same (at most 1.3e-16 apart).
 
+The coupled blow under the oil circuit (``--driven --cells 8 16 32 64 --delays-up-to 32``, 0abc7a7d's
+library, load about 1.5): :func:`driven_slots` is the library's method of steps (the drive by CVODE
+over chunks of steps, the end where the piston is free for good tested at the exact blow's
+instants) with the slot loop and the delayed segments, each chunk's lattice runs made again from
+the impact. Against the exact coupled blow from the same arrival, the shank's impulse on the piston
+(what the piston's momentum after the blow takes from the blow; the lattices end at the step end
+after the exact blow's end, where the piston is already free), the work dissipated in the rock and
+the permanent penetration, relative:
+
+| cells | library lattice: impulse | work | penetration | slots, delayed: impulse | work | penetration |
+| ---: | ---: | ---: | ---: | ---: | ---: | ---: |
+| 8 | -4.0e-3 | 1.6e-6 | 8.1e-7 | 1.7e-6 | -1.5e-6 | -7.4e-7 |
+| 16 | 2.2e-3 | 1.6e-6 | 8.0e-7 | 1.4e-6 | -4.6e-7 | -2.3e-7 |
+| 32 | -6.2e-3 | -1.4e-6 | -7.0e-7 | 1.9e-7 | -2.3e-8 | -1.2e-8 |
+| 64 | -7.8e-5 | 1.1e-7 | 5.5e-8 | not run | | |
+
 With the rod 1.1 m long (``--set "rod.segments.1.length=1.1 m"``: no travel time a multiple of
 another), the jump rule 1e-4, 12 slots, on 8 and 16 cells: the library's lattice -1.2e-2 and -7.7e-3, the
 slots alone -2.3e-2 and -1.9e-2, slots and delayed segments 3.0e-5 and 1.7e-5.
 
 Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
-[--delays-up-to N] [--merge loss|narrow] [--cut-jump F] [--compiled] [--set KEY=VALUE ...]``
+[--delays-up-to N] [--merge loss|narrow] [--cut-jump F] [--compiled] [--driven] [--set KEY=VALUE ...]``
 (some 6 minutes with the delayed segments up to 32 cells, nearly all of it theirs on 32;
 ``--compiled`` as long, nearly all of it the numpy loop's check with cuts at every edge on 32
 cells).
@@ -102,6 +118,7 @@ from __future__ import annotations
 import argparse
 import copy
 import dataclasses
+import math
 import sys
 import time
 from pathlib import Path
@@ -247,11 +264,17 @@ def _merge(W, arrays, cap):
 
 
 def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field, locate=False,
-              max_slots=48, delays=()):
+              max_slots=48, delays=(), hooks=None):
     """The blow's loop with slots (the module's text), the signature and results of
     ``blow._python_loop`` (``record_field`` and ``locate`` unused). ``delays``: ``(i, delta)``, the
     rod's segment ``i`` (0: the shank) longer than its whole cells by ``delta`` of a step's travel,
-    a delay at its far end (before the next segment, or the bit)."""
+    a delay at its far end (before the next segment, or the bit). ``hooks`` (the coupled blow's,
+    :func:`driven_slots`): ``"arriving"``, a list that takes the wave arriving at the driven end
+    over each step (its slots' average); ``"stop"``, ``f(step, F, G, bit, shank)`` at each step's
+    end (the cells' averages, the shank's force averaged over the step), the loop ended after a
+    step where it returns True."""
+    hooks = hooks or {}
+    arriving, stop_hook = hooks.get("arriving"), hooks.get("stop")
     Za, Zb = Z[:-1], Z[1:]
     wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
     n_p, m, feed = int(bounds[0]), bit.m, bit.f
@@ -273,6 +296,8 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
     junc, bitf, pen = [], [bit.force()], [bit.p]
     ended = "t_max"
     for step in range(n_max):
+        if arriving is not None:
+            arriving.append(float(GG[0] @ W))
         if nd:
             thr = CUT_JUMP * max(float(np.abs(FF).max()), float(np.abs(GG).max()), 1e-300)
             if CUT_JUMP < 0.0:
@@ -350,6 +375,8 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
         bitf.append(bit.force())
         pen.append(bit.p)
         FF, GG = Fn, Gn
+        if stop_hook is not None and stop_hook(step, FF @ W, GG @ W, bit, float(jrow[0])):
+            break
         if contact:
             last = step
         elif last < 0:
@@ -956,6 +983,144 @@ def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive
             (float(acc[0]), float(acc[1]), ended, float(acc[4]), float(acc[5])))
 
 
+def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, window=None, pen=False):
+    """The coupled blow under the drive (``coupled.driven_rock_contact``'s method of steps, its end
+    where the piston is free for good tested at the same instants, or at ``window`` if given) with
+    the slot loop on ``cells``
+    cells, the rod's segments delayed (``delays``) or rounded: ``(v_after[0], q_after[0], work
+    dissipated in the rock, duration, the drive's state after, the shank's impulse on the
+    piston)``, and with ``pen`` the permanent penetration. Each chunk's lattice runs are
+    the slot loop run again from the impact (the slots' state is not handed between chunks): the
+    same numbers, at a cost the probe does not measure."""
+    from impactbar.dynamics.implementations import use_reference
+    from impactbar.laws.rodrock import blow as B
+    from impactbar.laws.rodrock._rockloop import piston_free
+    from impactbar.laws.rodrock.blow import _bit_records
+    from impactbar.laws.rodrock.contact import BlowMap
+    from impactbar.laws.rodrock.coupled import causal_cells
+    from impactbar.laws.rodrock.coupled_exact import HORIZONS
+    from impactbar.laws.rodrock.grid import whole_steps
+    from impactbar.loads import FourierLoad
+
+    law = dataclasses.replace(model.law, method="lattice", cells_per_piston=cells, contact_events="step",
+                              driven_end="free")
+    mdl = model.with_(impact=law)
+    D = ()
+    if delays:
+        mdl, D = _floored_rod(mdl, cells)
+        law = mdl.law
+    q = np.array(q, dtype=float)
+    v = np.array(v, dtype=float)
+    p0 = float(drive.force(state.mode, state.z, q, v))
+    fixed = window is not None
+    if not fixed:
+        window = HORIZONS * model.law.window(model)  # (the rod as given: the library's horizon)
+    bm = BlowMap(mdl, FourierLoad(p0, []), t0, averaged=False, duration=window)
+    grid = bm.grid
+    n_p, dt, n_max = grid.piston_cells, grid.cell_time, bm.n_max
+    h = min([1.0 / model.s] + [g.travel_time(model) for g in model.law.segments])  # (end_window's, as given)
+    Z0 = float(grid.Z[0])
+    F0, G0 = bm.fields(q, v)
+    m = causal_cells(grid.Z, n_p)
+    chunk = 2 * m
+    averages = bm.drive
+    w = -float(model.drive_weights @ q)
+    st = state
+    follow = drive.abilities.end_flight
+    settings = None
+    bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
+
+    def run(n, hooks):
+        bit = B._start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None)
+        slot_loop(F0.copy(), G0.copy(), grid.Z, bounds, bit, dt, n, -1.0, 0, 0.0, averages[:n].copy(),
+                  False, max_slots=max_slots, delays=D, hooks=hooks)
+
+    def free_test(k0, k1):
+        """A stop hook: the first step end in ``[k0, k1)`` at or after a multiple of ``h`` (past
+        the impact) where the contact is open and the piston free for good; ``found`` its step + 1."""
+        found = []
+
+        def hook(step, F, G, bit, shank):
+            if step < k0:
+                return False
+            n = step + 1
+            j = math.floor(n * dt / h * (1.0 + 1e-12))  # (the last multiple of h at or before n dt)
+            if j >= 1 and whole_steps(j * h, dt) == n and shank == 0.0:
+                bs, bp = _bit_records(bit)
+                if piston_free(F, G, grid.Z, n_p, bs, bp, dt):
+                    found.append(step + 1)
+                    return True
+            return False
+        return hook, found
+
+    k, end, ended = 0, n_max, fixed
+    while k < end:
+        L = min(chunk, end - k)
+        arr = []
+        averages[k:k + L] = 0.0
+        run(k + L, {"arriving": arr})
+        arriving = np.array(arr[k:k + L])
+        breaks = t0 + dt * np.arange(k, k + L + 1)
+        fl = follow(mdl, st, breaks, w, -2.0 * arriving / Z0, Z0, settings)
+        averages[k:k + L] = fl.impulses / dt
+        if not ended:
+            hook, found = free_test(k, k + L)
+            run(k + L, {"stop": hook})
+            if found:
+                ended, end = True, found[0]
+                if end - k < L:
+                    L = end - k
+                    fl = follow(mdl, st, breaks[:L + 1], w, -2.0 * arriving[:L] / Z0, Z0, settings)
+                    averages[k:k + L] = fl.impulses / dt
+        st, w = fl.state, fl.w
+        k += L
+    bm.n_max = k
+    plain = B._python_loop
+    B._python_loop = lambda *a, **kw: slot_loop(*a, **kw, max_slots=max_slots, delays=D)
+    try:
+        with use_reference("rock.blow"):
+            rec = bm.contact(q, v)
+    finally:
+        B._python_loop = plain
+    blow = rec.blow.with_stored_apart()
+    out = (float(rec.v_after[0]), float(rec.q_after[0]), float(blow.work_on_rock), k * dt,
+           np.array(st.z, dtype=float), float(np.sum(blow.shank_forces)) * dt)
+    return out + (float(blow.permanent_penetration),) if pen else out
+
+
+def driven_table(model, drive, state, t0, q, v, cells, max_slots, slots_up_to):
+    """The coupled blow under the drive from the arrival, its end where the piston is free for good
+    (the library's default), against the exact coupled blow (``method="exact"``): the relative
+    differences of the shank's impulse on the piston (which the blow's end does not change once the
+    piston is free), the work dissipated in the rock and the permanent penetration, for the
+    library's lattice and the slots with delayed segments (:func:`driven_slots`, up to
+    ``slots_up_to`` cells), and their CPU s (the slots' numpy loop run again from the impact for
+    each chunk)."""
+    ex = model.law.driven_contact(model, drive, state, t0, q, v)
+    xr = ex.record.exact
+    ref = (xr.junction_impulse(xr.contact_junction), ex.record.blow.work_on_rock,
+           float(xr.permanent_penetration))
+    print("\ncoupled blow under the oil circuit, from the arrival, ended where the piston is free for good: "
+          "relative differences from the exact blow (shank impulse, work, permanent penetration); CPU s")
+    print(f"{'cells':>5s} | {'lattice, step':>38s} | {'slots, segments delayed':>38s}")
+    for n in cells:
+        lat = dataclasses.replace(model.law, method="lattice", cells_per_piston=n)
+        t = time.process_time()
+        c = lat.driven_contact(model.with_(impact=lat), drive, state, t0, q, v)
+        cpu = time.process_time() - t
+        b = c.record.blow
+        got = (float(np.sum(b.shank_forces)) * b.cell_time, b.work_on_rock, b.permanent_penetration)
+        row = [" ".join(f"{(g - r) / abs(r):10.2e}" for g, r in zip(got, ref, strict=True)) + f" {cpu:6.2f}"]
+        if n <= slots_up_to:
+            t = time.process_time()
+            out = driven_slots(model, drive, state, t0, q, v, n, max_slots, pen=True)
+            cpu = time.process_time() - t
+            got = (out[5], out[2], out[6])
+            row.append(" ".join(f"{(g - r) / abs(r):10.2e}" for g, r in zip(got, ref, strict=True))
+                       + f" {cpu:6.2f}")
+        print(f"{n:5d} | " + " | ".join(f"{x:>38s}" for x in row))
+
+
 def _floored_rod(model, cells):
     """The model on the rod whose segments are their whole cells of the lattice of ``cells`` (at
     least one), and each segment's travel left over, in steps: ``(model, [(i, delta), ...])``."""
@@ -1064,6 +1229,9 @@ def main(argv=None) -> None:
                     help="only the compiled slot loop: its differences from the numpy loop and the CPU "
                          "time of one blow (the numpy loop with cuts at every edge up to --delays-up-to "
                          "cells)")
+    ap.add_argument("--driven", action="store_true",
+                    help="only the coupled blow under the oil circuit, its end where the piston is free for "
+                         "good: the library's lattice and the slots with delayed segments against the exact")
     args = ap.parse_args(argv)
     global MERGE, CUT_JUMP, SUB
     MERGE, CUT_JUMP, SUB = args.merge, args.cut_jump, args.sub
@@ -1073,12 +1241,15 @@ def main(argv=None) -> None:
 
     from impactbar import FourierLoad
 
-    model, drive, state, _, q, v = arrival(dict(kv.split("=", 1) for kv in args.set) or None)
+    model, drive, state, t0, q, v = arrival(dict(kv.split("=", 1) for kv in args.set) or None)
     load = FourierLoad(drive.force(state.mode, state.z, q, v), [])
     window = args.window / model.s
 
     if args.compiled:
         compiled_table(model, load, q, v, window, args.cells, args.max_slots, args.delays_up_to)
+        return
+    if args.driven:
+        driven_table(model, drive, state, t0, q, v, args.cells, args.max_slots, args.delays_up_to)
         return
 
     names = ("v_after", "q_after", "work")
