@@ -102,12 +102,36 @@ the permanent penetration, relative:
 | 32 | -6.2e-3 | -1.4e-6 | -7.0e-7 | 1.9e-7 | -2.3e-8 | -1.2e-8 |
 | 64 | -7.8e-5 | 1.1e-7 | 5.5e-8 | not run | | |
 
+The orbit (``--orbit --cells 8 16``, ``find_orbit`` from rest with :func:`driven_slots` in the
+place of the library's coupled blow, its Newton steps on the library lattice's tangent), relative
+to the exact blows' orbit (period 1.03408, impact velocity 0.490378, 2.7 s):
+
+| orbit | period | impact velocity | CPU s |
+| --- | ---: | ---: | ---: |
+| 8 cells, library lattice | 2.3e-4 | -7.1e-4 | 0.3 |
+| 8 cells, slots, the blow ended at the step's end | -3.4e-6 | 1.3e-4 | 38 |
+| 8 cells, slots, the blow ended at the exact blow's instant | -9.6e-6 | 1.3e-5 | 38 |
+| 16 cells, library lattice | -1.5e-4 | 4.1e-4 | 0.3 |
+| 16 cells, slots, the step's end | -2.4e-6 | 1.2e-4 | 79 |
+| 16 cells, slots, the exact instant | -2.9e-6 | 3.6e-6 | 78 |
+| 64 cells, library lattice | 3.1e-6 | -1.0e-5 | 0.8 |
+| 64 cells, library lattice, its end 1.31e-4 later | -5.5e-6 | 1.8e-4 | 0.8 |
+
+Ended at the step's end (on 8 and 16 cells the same instant, 1.31e-4 after the exact blow's end, 13
+times the shortest travel time), the slots' orbit is 1.2e-4 off in the impact velocity; the
+library's lattice on 64 cells, whose step's end falls on the exact end, moves as far with its end
+moved on as much. The piston is free there: what moves is where the blow hands it to the flight,
+measured from the shank's new rest position while the rod still rings. Ended at the exact instant
+(``exact_end``: the last step run to that fraction of it, the cells at the end what entered before
+it and what is left after it), the orbit is 1.3e-5 and 3.6e-6 off (order 1.8).
+
 With the rod 1.1 m long (``--set "rod.segments.1.length=1.1 m"``: no travel time a multiple of
 another), the jump rule 1e-4, 12 slots, on 8 and 16 cells: the library's lattice -1.2e-2 and -7.7e-3, the
 slots alone -2.3e-2 and -1.9e-2, slots and delayed segments 3.0e-5 and 1.7e-5.
 
 Run: ``python benchmarks/probes/lattice_slots.py [--cells 8 16 ...] [--max-slots K] [--window W]
-[--delays-up-to N] [--merge loss|narrow] [--cut-jump F] [--compiled] [--driven] [--set KEY=VALUE ...]``
+[--delays-up-to N] [--merge loss|narrow] [--cut-jump F] [--compiled] [--driven] [--orbit]
+[--set KEY=VALUE ...]``
 (some 6 minutes with the delayed segments up to 32 cells, nearly all of it theirs on 32;
 ``--compiled`` as long, nearly all of it the numpy loop's check with cuts at every edge on 32
 cells).
@@ -275,6 +299,7 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
     step where it returns True."""
     hooks = hooks or {}
     arriving, stop_hook = hooks.get("arriving"), hooks.get("stop")
+    frac = float(hooks.get("end_fraction", 1.0))  # the last step run to this fraction of it only
     Za, Zb = Z[:-1], Z[1:]
     wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
     n_p, m, feed = int(bounds[0]), bit.m, bit.f
@@ -305,14 +330,19 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
             cuts = [_jump_cuts(srcF[i], W_src, FF[j], W, d, thr) for i, (j, d) in enumerate(D)]
             cuts.append(np.arange(1, SUB) / SUB)
             W, (FF, GG) = _refine(W, [FF, GG], np.concatenate(cuts))
+        partial = step == n_max - 1 and frac < 1.0
+        if partial:
+            W, (FF, GG) = _refine(W, [FF, GG], np.array([frac]))
         Fd = np.array([_delayed(srcF[i], W_src, FF[j], W, d, W)
                        for i, (j, d) in enumerate(D)]).reshape(nd, W.size)
         Gout = np.zeros((nd, W.size))
         Fn, Gn = np.empty_like(FF), np.empty_like(GG)
         jrow = np.zeros(bounds.size)
-        pd = drive[step]
+        pd = drive[step] / frac if partial else drive[step]  # (the drive's impulse over the part)
         k = 0
         while k < W.size:
+            if partial and np.sum(W[:k]) >= frac - 1e-12:
+                break
             Fs = FF[:, k].copy()
             for i, (j, _) in enumerate(D):
                 Fs[j] = Fd[i, k]
@@ -360,6 +390,16 @@ def slot_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_
             u_shank += (Fn[jc + 1, k] - GG[jc + 1, k]) / Zb[jc] * tau
             jrow += N[bounds - 1] * W[k]
             k += 1
+        if partial:  # the cells at the end inside the step: what entered before it, what is left after
+            kf = k
+            Fm = Fn[:, :kf] @ W[:kf] + FF[:, kf:] @ W[kf:]
+            Gm = Gn[:, :kf] @ W[:kf] + GG[:, kf:] @ W[kf:]
+            junc.append(jrow)
+            bitf.append(bit.force())
+            pen.append(bit.p)
+            junc = np.array(junc).reshape(-1, bounds.size)
+            return (Fm, Gm, junc, np.array(bitf), np.array(pen), np.array([]),
+                    (u_shank, grid_loss, ended, gap, work))
         if nd:  # the waves sent back through each delay, on slots cut where they jump
             thr = -1.0 if CUT_JUMP < 0.0 else CUT_JUMP * max(float(np.abs(Gout).max()), 1e-300)
             cuts = np.concatenate([_jump_cuts(srcG[i], W_src, Gout[i], W, d, thr)
@@ -983,13 +1023,17 @@ def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive
             (float(acc[0]), float(acc[1]), ended, float(acc[4]), float(acc[5])))
 
 
-def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, window=None, pen=False):
+def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, window=None, pen=False,
+                 full=False, settings=None, exact_end=False):
     """The coupled blow under the drive (``coupled.driven_rock_contact``'s method of steps, its end
     where the piston is free for good tested at the same instants, or at ``window`` if given) with
     the slot loop on ``cells``
     cells, the rod's segments delayed (``delays``) or rounded: ``(v_after[0], q_after[0], work
     dissipated in the rock, duration, the drive's state after, the shank's impulse on the
-    piston)``, and with ``pen`` the permanent penetration. Each chunk's lattice runs are
+    piston)``, and with ``pen`` the permanent penetration; with ``full`` the library's
+    :class:`~impactbar.laws.base.DrivenContact` instead (what an orbit takes). ``exact_end``: the
+    blow ended at the multiple of ``h`` where the piston is found free for good, inside its step
+    (the slots' last step run to that fraction), not at the step's end. Each chunk's lattice runs are
     the slot loop run again from the impact (the slots' state is not handed between chunks): the
     same numbers, at a cost the probe does not measure."""
     from impactbar.dynamics.implementations import use_reference
@@ -1027,8 +1071,8 @@ def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, w
     w = -float(model.drive_weights @ q)
     st = state
     follow = drive.abilities.end_flight
-    settings = None
     bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
+    pieces, events = [], []
 
     def run(n, hooks):
         bit = B._start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None)
@@ -1053,7 +1097,7 @@ def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, w
             return False
         return hook, found
 
-    k, end, ended = 0, n_max, fixed
+    k, end, ended, frac = 0, n_max, fixed, 1.0
     while k < end:
         L = min(chunk, end - k)
         arr = []
@@ -1068,21 +1112,37 @@ def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, w
             run(k + L, {"stop": hook})
             if found:
                 ended, end = True, found[0]
-                if end - k < L:
+                if exact_end:  # the end at the multiple of h itself, inside the step
+                    j = math.floor(end * dt / h * (1.0 + 1e-12))
+                    frac = min(max((j * h - (end - 1) * dt) / dt, 1e-9), 1.0)
+                if end - k < L or frac < 1.0:
                     L = end - k
-                    fl = follow(mdl, st, breaks[:L + 1], w, -2.0 * arriving[:L] / Z0, Z0, settings)
+                    b = breaks[:L + 1].copy()
+                    b[L] = t0 + (end - 1 + frac) * dt
+                    fl = follow(mdl, st, b, w, -2.0 * arriving[:L] / Z0, Z0, settings)
                     averages[k:k + L] = fl.impulses / dt
         st, w = fl.state, fl.w
+        pieces += fl.pieces
+        events += fl.events
         k += L
     bm.n_max = k
     plain = B._python_loop
-    B._python_loop = lambda *a, **kw: slot_loop(*a, **kw, max_slots=max_slots, delays=D)
+    B._python_loop = lambda *a, **kw: slot_loop(*a, **kw, max_slots=max_slots, delays=D,
+                                                 hooks={"end_fraction": frac})
     try:
         with use_reference("rock.blow"):
             rec = bm.contact(q, v)
     finally:
         B._python_loop = plain
     blow = rec.blow.with_stored_apart()
+    if full:
+        from impactbar.laws.base import DrivenContact
+        from impactbar.laws.rodrock.coupled import _rigid_gaps
+
+        rec.blow = dataclasses.replace(blow, ended_by="separated") if ended and not fixed else blow
+        work = float(sum(p.piston_work() for p in pieces))
+        return DrivenContact(rec.q_after.copy(), rec.v_after.copy(), float(t0) + (k - 1 + frac) * dt, rec, st,
+                             pieces, events, work, _rigid_gaps(model, q, v, rec.blow, averages, t0))
     out = (float(rec.v_after[0]), float(rec.q_after[0]), float(blow.work_on_rock), k * dt,
            np.array(st.z, dtype=float), float(np.sum(blow.shank_forces)) * dt)
     return out + (float(blow.permanent_penetration),) if pen else out
@@ -1119,6 +1179,66 @@ def driven_table(model, drive, state, t0, q, v, cells, max_slots, slots_up_to):
             row.append(" ".join(f"{(g - r) / abs(r):10.2e}" for g, r in zip(got, ref, strict=True))
                        + f" {cpu:6.2f}")
         print(f"{n:5d} | " + " | ".join(f"{x:>38s}" for x in row))
+
+
+def orbit_table(cells, max_slots):
+    """The example's orbit (``find_orbit`` from rest) with the coupled blows of the library's
+    lattice and of the slots with delayed segments (:func:`driven_slots` in the place of
+    ``coupled.driven_rock_contact``; the orbit's Newton steps still take the library lattice's
+    tangent), their blows ended at the step's end after the exact blow's end or at that end itself
+    (``exact_end``), against the exact blows' orbit: the relative differences of the period and the
+    impact velocity, CPU s. And the library's lattice on 64 cells with its blows' end moved on by
+    what the step's end adds on 8 cells (``coupled.END_DELAY``): the orbit's sensitivity to the
+    instant the blow hands the piston to the flight."""
+    import impactbar as ib
+    from impactbar import physical as ph
+    from impactbar.laws.rodrock import coupled
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock.toml"
+    cfg, _ = ph.read_config(str(example))
+    d = ph.build(cfg)
+    model, drive = d.model(), d.drive()
+
+    def orbit(law):
+        t = time.process_time()
+        o = ib.find_orbit(model.with_(impact=law), drive)
+        return o, time.process_time() - t
+
+    ex, cpu = orbit(dataclasses.replace(model.law, method="exact"))
+    print(f"\nthe orbit against the exact blows' (period {ex.period!r}, impact velocity "
+          f"{float(ex.impact_velocities[0])!r}, {cpu:.1f} s): relative differences of the period and the "
+          "impact velocity, CPU s")
+
+    def show(name, o, cpu):
+        dp = (o.period - ex.period) / ex.period
+        dv = float((o.impact_velocities[0] - ex.impact_velocities[0]) / ex.impact_velocities[0])
+        print(f"{name:34s} {dp:10.2e} {dv:10.2e} {cpu:7.1f}", flush=True)
+
+    plain = coupled.driven_rock_contact
+    for n in cells:
+        law = dataclasses.replace(model.law, method="lattice", cells_per_piston=n)
+        show(f"{n:3d} cells, library lattice", *orbit(law))
+        for exact_end in (False, True):
+            def slots(model, drive, state, t0, q, v, settings=None, _e=exact_end):
+                return driven_slots(model, drive, state, t0, q, v, model.law.cells_per_piston, max_slots,
+                                    full=True, settings=settings, exact_end=_e)
+            coupled.driven_rock_contact = slots
+            try:
+                got = orbit(law)
+            finally:
+                coupled.driven_rock_contact = plain
+            show(f"{n:3d} cells, slots, " + ("the exact end" if exact_end else "the step's end"), *got)
+    h = min([1.0 / model.s] + [g.travel_time(model) for g in model.law.segments])
+    dt = 1.0 / (model.s * 8)
+    shift = math.ceil(13.0 * h / dt * (1.0 - 1e-12)) * dt - 13.0 * h
+    law = dataclasses.replace(model.law, method="lattice", cells_per_piston=64)
+    saved = coupled.END_DELAY
+    for delay in (0.0, shift / law.window(model)):
+        coupled.END_DELAY = delay
+        try:
+            show(f" 64 cells, library, end +{delay * law.window(model):.2e}", *orbit(law))
+        finally:
+            coupled.END_DELAY = saved
 
 
 def _floored_rod(model, cells):
@@ -1232,6 +1352,9 @@ def main(argv=None) -> None:
     ap.add_argument("--driven", action="store_true",
                     help="only the coupled blow under the oil circuit, its end where the piston is free for "
                          "good: the library's lattice and the slots with delayed segments against the exact")
+    ap.add_argument("--orbit", action="store_true",
+                    help="only the example's orbit with the slots' coupled blows against the exact blows' "
+                         "(some 40 s an orbit on 8 cells, 80 s on 16)")
     args = ap.parse_args(argv)
     global MERGE, CUT_JUMP, SUB
     MERGE, CUT_JUMP, SUB = args.merge, args.cut_jump, args.sub
@@ -1247,6 +1370,9 @@ def main(argv=None) -> None:
 
     if args.compiled:
         compiled_table(model, load, q, v, window, args.cells, args.max_slots, args.delays_up_to)
+        return
+    if args.orbit:
+        orbit_table(args.cells, args.max_slots)
         return
     if args.driven:
         driven_table(model, drive, state, t0, q, v, args.cells, args.max_slots, args.delays_up_to)
