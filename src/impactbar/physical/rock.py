@@ -102,7 +102,9 @@ class DrillString:
     cells_per_piston : int, optional
         Puts the simulator's blows on the cell grid with this many cells along the piston
         (:class:`~impactbar.RodRock`'s ``cells_per_piston``, :math:`1 \le n \le 4096`; a numerical setting,
-        no physics). Its orbits converge to the exact blows' at second order (theory §4d).
+        no physics). Its orbits converge to the exact blows' at second order where every segment is
+        whole cells and no re-contact falls inside a step, otherwise at first order and not
+        monotonically (theory §4d, §11).
     method : {"auto", "exact", "lattice"}
         The simulator's blows (:class:`~impactbar.RodRock`'s ``method``): exact by default.
     driven_end : {"free", "window"}, optional
