@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._shared.threads import single_threaded_blas
+from .._shared.validate import check_real
 
 __all__ = ["polish", "polish_search"]
 
@@ -238,10 +239,7 @@ def polish_search(evaluate, margins, gradients, history: list, points: dict, fke
     """
     from .optimality import KKT_TOLERANCE, certify
 
-    tolerance = KKT_TOLERANCE if tolerance is None else tolerance
-    if not (isinstance(tolerance, int | float) and not isinstance(tolerance, bool) and np.isfinite(tolerance)
-            and tolerance >= 0.0):
-        raise ValueError(f"tolerance must be a finite number >= 0 (the KKT residual); got {tolerance!r}")
+    tolerance = KKT_TOLERANCE if tolerance is None else check_real("tolerance", tolerance, lo=0.0)
     top = max((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey])
 
     def objective(v):
