@@ -1024,11 +1024,17 @@ def slot_loop_compiled(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive
             (float(acc[0]), float(acc[1]), ended, float(acc[4]), float(acc[5])))
 
 
-def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, window=None, pen=False,
+def _end_window(model):
+    """The instants' spacing ``h`` at which a blow under a drive is tested for its end: the shortest
+    travel time of the piston's and the rod's segments as given (``coupled.end_window``'s, which
+    takes them from a grid, and here the grid's segments are floored)."""
+    return min([1.0 / model.s] + [g.travel_time(model) for g in model.law.segments])
+
+
+def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, pen=False,
                  full=False, settings=None, exact_end=False):
     """The coupled blow under the drive (``coupled.driven_rock_contact``'s method of steps, its end
-    where the piston is free for good tested at the same instants, or at ``window`` if given) with
-    the slot loop on ``cells``
+    where the piston is free for good tested at the same instants) with the slot loop on ``cells``
     cells, the rod's segments delayed (``delays``) or rounded: ``(v_after[0], q_after[0], work
     dissipated in the rock, duration, the drive's state after, the shank's impulse on the
     piston)``, and with ``pen`` the permanent penetration; with ``full`` the library's
@@ -1057,13 +1063,11 @@ def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, w
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)
     p0 = float(drive.force(state.mode, state.z, q, v))
-    fixed = window is not None
-    if not fixed:
-        window = HORIZONS * model.law.window(model)  # (the rod as given: the library's horizon)
-    bm = BlowMap(mdl, FourierLoad(p0, []), t0, averaged=False, duration=window)
+    horizon = HORIZONS * model.law.window(model)  # (the rod as given: the library's horizon)
+    bm = BlowMap(mdl, FourierLoad(p0, []), t0, averaged=False, duration=horizon)
     grid = bm.grid
     n_p, dt, n_max = grid.piston_cells, grid.cell_time, bm.n_max
-    h = min([1.0 / model.s] + [g.travel_time(model) for g in model.law.segments])  # (end_window's, as given)
+    h = _end_window(model)
     Z0 = float(grid.Z[0])
     F0, G0 = bm.fields(q, v)
     m = causal_cells(grid.Z, n_p)
@@ -1098,7 +1102,7 @@ def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, w
             return False
         return hook, found
 
-    k, end, ended, frac = 0, n_max, fixed, 1.0
+    k, end, ended, frac = 0, n_max, False, 1.0
     while k < end:
         L = min(chunk, end - k)
         arr = []
@@ -1140,7 +1144,7 @@ def driven_slots(model, drive, state, t0, q, v, cells, max_slots, delays=True, w
         from impactbar.laws.base import DrivenContact
         from impactbar.laws.rodrock.coupled import _rigid_gaps
 
-        rec.blow = dataclasses.replace(blow, ended_by="separated") if ended and not fixed else blow
+        rec.blow = dataclasses.replace(blow, ended_by="separated") if ended else blow
         work = float(sum(p.piston_work() for p in pieces))
         return DrivenContact(rec.q_after.copy(), rec.v_after.copy(), float(t0) + (k - 1 + frac) * dt, rec, st,
                              pieces, events, work, _rigid_gaps(model, q, v, rec.blow, averages, t0))
@@ -1229,7 +1233,7 @@ def orbit_table(cells, max_slots):
             finally:
                 coupled.driven_rock_contact = plain
             show(f"{n:3d} cells, slots, " + ("the exact end" if exact_end else "the step's end"), *got)
-    h = min([1.0 / model.s] + [g.travel_time(model) for g in model.law.segments])
+    h = _end_window(model)
     dt = 1.0 / (model.s * 8)
     shift = math.ceil(13.0 * h / dt * (1.0 - 1e-12)) * dt - 13.0 * h
     law = dataclasses.replace(model.law, method="lattice", cells_per_piston=64)
