@@ -83,11 +83,19 @@ NOT_RECORDS = {
     "laws/rodrock/_exactode.py": {"ex"},  # the series' first term
     "laws/rodrock/_exactresume.py": {"before", "off"},  # sequences' ends
     "laws/rodrock/_rockloop.py": {"Fn", "bounds"},  # the far end's cell; the shank's boundary
+    # the shank's boundary; the records' first entries (bitf, pen); the driven end's cell (Z); the first
+    # slot at the start (FF, GG, W)
+    "laws/rodrock/_rockslots.py": {"bounds", "bitf", "pen", "Z", "FF", "GG", "W"},
+    # the slots' grids' first edges (edges, cum, eold, ubuf, srt) and a source's first slot (cur); the
+    # heap's root (hk, hi, hv)
+    "laws/rodrock/_slotgrid.py": {"edges", "cum", "cur", "eold", "ubuf", "srt", "hk", "hi", "hv"},
     "laws/rodrock/_rocktangent.py": {"Fn", "Gf", "Gp", "dFna", "dGa", "seg_z"},  # the first cell or segment's
     "laws/rodrock/blow.py": {"bitf", "times"},  # sequences' first and last entries
     "laws/rodrock/grid.py": {"off", "times"},  # sequences' first and last entries
     "laws/rodrock/contact.py": {"qa"},  # the rigid mode
-    "laws/rodrock/coupled.py": {"column"},  # the far end's cell
+    # the far end's cell; a step's (widths, values) pair (a); the blow's last step (times, dts, force,
+    # shank_forces)
+    "laws/rodrock/coupled.py": {"column", "a", "times", "dts", "force", "shank_forces"},
     "laws/rodrock/coupled_exact.py": {"travel", "xv"},  # the first segment's; a grid's ends
     "laws/rodrock/coupled_tangent.py": {"travel", "c", "y_end"},  # the first segment's; the rigid
     # mode's weight; the last piece's end
@@ -709,6 +717,7 @@ NOT_COLUMN_RECORDS = {
     "laws/rodrock/_rocktangent.py": {"J": MATRIX, "dGf": CELLS, "out": MATRIX},
     "laws/rodrock/contact.py": {"Nq": RIGID, "amp": COEFFS, "modes.shapes(np.zeros(1))": RIGID, "xe": GRID},
     "laws/rodrock/coupled.py": {"field": CELLS},
+    "laws/rodrock/_rockslots.py": {"Fn": CELLS, "GG": CELLS},
     "laws/rodrock/coupled_exact.py": {"c": COEFFS},
     "laws/rodrock/coupled_tangent.py": {"cubic": COEFFS, "dq0": RIGID},
     "laws/rodrock/exactjac.py": {"dq": RIGID, "jac": MATRIX},

@@ -29,7 +29,7 @@ def _lattice(model, cells, events):
 def test_contact_events_is_checked():
     law = RodRock(segments=[RodSegment(length=4.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
     assert law.contact_events == "step"
-    with pytest.raises(ValueError, match="contact_events must be 'step' or 'inside'"):
+    with pytest.raises(ValueError, match="contact_events must be 'step', 'inside' or 'slots'"):
         dataclasses.replace(law, contact_events="later")
 
 

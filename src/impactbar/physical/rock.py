@@ -111,10 +111,11 @@ class DrillString:
         Where a lattice blow under the oil circuit ends (:class:`~impactbar.RodRock`'s
         ``driven_end``, theory §11): where the piston is free for good, or at the law's fixed
         window. Default (``None``): the law's (``"free"``).
-    contact_events : {"step", "inside"}, optional
+    contact_events : {"step", "inside", "slots"}, optional
         Where the lattice's piston-shank separation and re-contact fall
-        (:class:`~impactbar.RodRock`'s ``contact_events``, theory §11): at step ends or inside their
-        steps. Default (``None``): the law's (``"step"``).
+        (:class:`~impactbar.RodRock`'s ``contact_events``, theory §11): at step ends, inside their
+        steps, or every event of the blow at its own instant on the slot lattice. Default (``None``):
+        the law's (``"step"``).
     """
 
     segments: tuple

@@ -450,7 +450,8 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
 
 
 def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, energy_fraction=1e-9,
-               separation_time=None, gap=0.0, bit_state=None, record_field=False, n_steps=None) -> Blow:
+               separation_time=None, gap=0.0, bit_state=None, record_field=False, n_steps=None,
+               end_fraction=1.0) -> Blow:
     """A blow on ``grid`` from the piston's waves ``F, G`` (shape ``(cells,)``, the rod's zero: at rest
     under the feed), with the drive's force ``drive`` on the piston's far end averaged over each step
     (shape ``(n_max,)`` for ``n_max = ceil(t_max / dt)`` steps, or None for no drive); the rest as
@@ -461,7 +462,8 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     under the feed, ``p = f/k``). ``n_steps`` stops after that many steps
     whatever the energy (a state inside a blow). The result's ``piston_waves`` are the piston's
     final ``(F, G)``, ``gap`` the piston-shank gap and ``shank_displacement`` the shank's dynamic
-    displacement at the end."""
+    displacement at the end. ``end_fraction`` (the slot lattice, ``grid.slots``, with ``n_steps``):
+    the last step run to that fraction of it only, the blow's end inside it."""
     s, dt, n_p, Z = grid.s, grid.cell_time, grid.piston_cells, grid.Z
     F = np.array(F, dtype=float)
     G = np.array(G, dtype=float)
@@ -473,13 +475,13 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     p_start = bit.p
     static = grid.static * feed * feed
     F, G, junc, bitf, pen, fld, acc = _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap,
-                                           record_field)
-    u_shank, grid_loss, ended, gap, drive_work = acc
+                                           record_field, end_fraction)
+    u_shank, grid_loss, ended, gap, drive_work, *held = acc  # (held: the slot lattice's delays' waves)
     shank = junc[:, JUNC_SHANK]
     n = shank.size
     e = (F * F + G * G) / Z * dt
     piston_e = float(np.sum(e[:n_p]))
-    rod_waves = float(np.sum(e[n_p:]))
+    rod_waves = float(np.sum(e[n_p:])) + sum(held)
     feed_work = feed * u_shank
     rock0 = feed * feed / (2.0 * k_u)  # the rock's recoverable elastic energy under the feed
     rod_energy = rod_waves + feed * (u_shank - (bit.p - p_start)) + static + 0.5 * bit_mass * bit.w * bit.w
@@ -487,8 +489,11 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     uncertainty = 0.0
     if ended == "t_max" and n_steps is None:  # stopped at the horizon, nothing certified
         uncertainty = _still_possible(rod_waves, piston_e, float(bitf[-1]), bit, feed) / available
+    times = dt * np.arange(n + 1)
+    if end_fraction < 1.0 and n == n_max:  # (the slot lattice's end inside its last step)
+        times[-1] = (n - 1 + end_fraction) * dt
     return Blow(
-        times=dt * np.arange(n + 1), shank_forces=shank, junction_forces=junc,
+        times=times, shank_forces=shank, junction_forces=junc,
         bit_forces=bitf, penetrations=pen, field=fld if record_field else None,
         energy_at_impact=E0, feed_work=feed_work,
         available_energy=available, work_on_rock=bit.work + rock0,
@@ -530,7 +535,7 @@ def _start_bit(Z, k, k_u, bit_mass, feed, bit_state) -> _Bit:
     return bit
 
 
-def _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap, record_field):
+def _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap, record_field, end_fraction=1.0):
     """The blow's loop (compiled, or numpy's under ``use_reference("rock.blow")``) over at most
     ``n_max`` steps from the waves ``F, G`` (copied), the bit ``bit`` updated in place; the bit's
     largest and permanent penetrations taken at the end if it was still advancing. Returns the
@@ -541,10 +546,13 @@ def _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap, record_field
     drive = np.zeros(n_max) if drive is None else np.ascontiguousarray(drive[:n_max], dtype=float)
     if drive.size < n_max:
         raise ValueError(f"drive must have at least {n_max} steps; got {drive.size}")
-    loop = _compiled_loop if use_fast("rock.blow") else _python_loop
     quiet = 0 if separation_time is None else max(1, math.ceil(separation_time / dt))
-    out = loop(F, G, grid.Z, grid.bounds, bit, dt, n_max, stop, quiet, float(gap), drive, record_field,
-               grid.locate)
+    if grid.slots:
+        out = _slots_loop(grid, F, G, bit, n_max, stop, quiet, float(gap), drive, record_field, end_fraction)
+    else:
+        loop = _compiled_loop if use_fast("rock.blow") else _python_loop
+        out = loop(F, G, grid.Z, grid.bounds, bit, dt, n_max, stop, quiet, float(gap), drive, record_field,
+                   grid.locate)
     if bit.branch == _LOAD and bit.p > bit.p_max:
         # the window ended while the bit still advanced into the rock: its largest penetration is the
         # last, and what would stay of it the unloading line from there (not those of the last
@@ -562,7 +570,7 @@ def blow_end(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, n_steps: int):
     as the :class:`Blow` of ``solve_blow(..., n_steps=n_steps)``."""
     n_p = grid.piston_cells
     bit = _start_bit(grid.Z, k, k_u, bit_mass, feed, None)
-    F, G, *_, (u_shank, _, _, gap, _) = _run(grid, np.array(F, dtype=float), np.array(G, dtype=float), drive,
+    F, G, *_, (u_shank, _, _, gap, *_) = _run(grid, np.array(F, dtype=float), np.array(G, dtype=float), drive,
                                              bit, max(1, int(n_steps)), -1.0, None, 0.0, False)
     return F[:n_p], G[:n_p], gap, u_shank, bit.p_perm
 
@@ -585,14 +593,42 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, re
     acc = np.zeros(S.ACC_SIZE)
     ctrl = _loop_controls(dt, stop, quiet, gap0, locate=locate)
     blow_loop(F, G, Z, bounds.astype(np.int64), bs, bp, ctrl, drive, junc, bitrec, field, acc)
-    bit.p, bit.w, bit.branch = bs[S.BIT_P], bs[S.BIT_W], int(bs[S.BIT_BRANCH])
-    bit.p_max, bit.R_max = bs[S.BIT_PMAX], bs[S.BIT_RMAX]
-    bit.p_perm, bit.work = bs[S.BIT_PPERM], bs[S.BIT_WORK]
+    _set_bit(bit, bs)
     n = int(acc[S.ACC_STEPS])
     ended = ("t_max", "energy", "separated")[int(acc[S.ACC_ENDED])]
     return (F, G, junc[:n], bitrec[:n + 1, BITREC_FORCE], bitrec[:n + 1, BITREC_PEN], field[:n],
             (float(acc[S.ACC_USHANK]), float(acc[S.ACC_LOSS]), ended, float(acc[S.ACC_GAP]),
              float(acc[S.ACC_WORK])))
+
+
+def _slots_loop(grid, F, G, bit, n_max, stop, quiet, gap0, drive, record_field, end_fraction=1.0):
+    """The blow's loop on the slot lattice (:class:`~impactbar.laws.rodrock._rockslots.SlotLattice`,
+    ``grid.slots``): the results of :func:`_compiled_loop`, the waves the cells' averages; the last
+    step run to ``end_fraction`` of it."""
+    from ._rockslots import SlotLattice
+
+    bs, bp = _bit_records(bit)
+    lat = SlotLattice(grid.Z, grid.bounds, grid.delays, F, G, gap0, bs, bp)
+    out = lat.run(grid.cell_time, drive[:n_max], stop=stop, quiet=quiet, frac=end_fraction,
+                  record_field=record_field)
+    _set_bit(bit, lat.bs)
+    u_shank, grid_loss, gap, work = lat.totals()
+    # the energy the cells' averages drop from the slots' booked with the grid's loss; the waves held
+    # in the delays are the rod's
+    piston, rod, held = lat.energies()
+    Fa, Ga, Z, n_p = out["F"], out["G"], grid.Z, grid.piston_cells
+    e = (Fa * Fa + Ga * Ga) / Z * grid.cell_time
+    grid_loss += (piston - float(np.sum(e[:n_p]))) + (rod - float(np.sum(e[n_p:])))
+    ended = ("t_max", "energy", "separated")[lat.ended]
+    return (Fa, Ga, out["junc"], out["bitf"], out["pen"], out["field"],
+            (u_shank, grid_loss, ended, gap, work, held))
+
+
+def _set_bit(bit, bs):
+    """The bit ``bit`` set from the compiled loop's state ``bs``."""
+    bit.p, bit.w, bit.branch = bs[S.BIT_P], bs[S.BIT_W], int(bs[S.BIT_BRANCH])
+    bit.p_max, bit.R_max = bs[S.BIT_PMAX], bs[S.BIT_RMAX]
+    bit.p_perm, bit.work = bs[S.BIT_PPERM], bs[S.BIT_WORK]
 
 
 def _bit_records(bit):

@@ -361,8 +361,8 @@ def _stepped_maps(s: float, piston, n_p: int, M: int):
 
 
 @functools.lru_cache(maxsize=32)
-def _grid_for(s, lengths, impedances, speeds, cells_per_piston, piston=None, locate=False):
-    return blow_grid(s, lengths, impedances, speeds, cells_per_piston, piston, locate)
+def _grid_for(s, lengths, impedances, speeds, cells_per_piston, piston=None, locate=False, slots=False):
+    return blow_grid(s, lengths, impedances, speeds, cells_per_piston, piston, locate, slots)
 
 
 class BlowMap:
@@ -391,7 +391,7 @@ class BlowMap:
             cells_per_piston = law.cells_per_piston
         self.grid = grid = _grid_for(s, tuple(g.length for g in segs), tuple(g.impedance for g in segs),
                                      tuple(g.wave_speed for g in segs), cells_per_piston, model.piston,
-                                     law.contact_events == "inside")
+                                     law.contact_events == "inside", law.contact_events == "slots")
         self.n_p, dt = grid.piston_cells, grid.cell_time
         self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
         if duration is None:
@@ -400,6 +400,8 @@ class BlowMap:
         self.drive = _drive_averages(load, self.t0, dt, self.n_max) if averaged else np.zeros(self.n_max)
         self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
         self._c = model.end_weights
+        #: the last step run to this fraction of it (the slot lattice's coupled blow, ended inside it)
+        self.end_fraction = 1.0
 
     def shifted(self, t0s):
         """Copies of this map at the load times ``t0s`` (the grid and projections shared; the
@@ -438,7 +440,7 @@ class BlowMap:
         F, G = self.fields(q, v)
         dt = self.grid.cell_time
         blow = solve_blow(self.grid, F, G, self.drive, *self.params, t_max=self.n_max * dt,
-                          n_steps=self.n_max)
+                          n_steps=self.n_max, end_fraction=self.end_fraction)
         # the next flight's positions are from the shank's new rest position
         end = blow.shank_displacement - blow.gap - blow.permanent_penetration
         qa, va = _modal(model, self.n_p, blow, end)

@@ -20,6 +20,13 @@ those averages (:class:`~impactbar.laws.rodrock.contact.RockContact`, the same n
 work on the piston, ``int p u_t(0) dt``, exceeds the lattice's ``sum p_k (p_k - 2 G_k) dt / Z_0`` by
 ``sum int (p - p_k)^2 dt / Z_0 >= 0``, the part of the outgoing wave that the cell averages drop
 (second order in the step); it is booked as energy the blow took.
+
+On the slot lattice (``RodRock(contact_events="slots")``, :mod:`._rockslots`) the same chunks run on
+its state (:class:`_Slots`): the wave arriving at the driven end is known slot by slot, and the drive
+takes a break inside a step wherever it jumps by more than :data:`DRIVE_JUMP` of its largest value,
+each interval's value its average (with each step's average alone the circuit's state after a blow
+converged at first order only); and the blow ends at the multiple of ``h`` where the piston is found
+free for good itself, its last step run to that fraction (the drive flown to there).
 """
 
 from __future__ import annotations
@@ -34,6 +41,10 @@ from . import _records as S
 from ._records import JUNC_SHANK
 
 __all__ = ["driven_rock_contact", "causal_cells", "END_DELAY"]
+
+#: The slot lattice's coupled blow gives the drive a break inside a step where the wave arriving at
+#: the driven end jumps by more than this fraction of its largest value over the chunk.
+DRIVE_JUMP = 1e-4
 
 #: The blow's end moved this fraction of the law's window past where the piston is free for good
 #: (0, the default: there; the orbit's sensitivity to the end, theory §11).
@@ -101,15 +112,117 @@ def end_window(grid) -> float:
     return float(np.min(travel))
 
 
-def _steps_to_free(grid, F, G, bs, bp, gap, drive, bounds, k, h):
-    """:func:`_steps` over the chunk of ``drive.size`` steps from step ``k``, the piston tested for
-    free for good (:func:`~impactbar.laws.rodrock._rockloop.piston_free`, the contact open on the
-    step before) at the first step end at or after each multiple of ``h`` only (the exact blow's
-    instants, :func:`end_window`): ``(gap, ran)``, ``ran`` the chunk's steps up to the first such
-    end (-1: none within it), the waves and the bit then."""
+class _Cells:
+    """The plain lattice's state between the coupled blow's chunks (:func:`_steps`): its waves, the
+    bit's state and the contact's (``gap``)."""
+
+    def __init__(self, grid, F, G, bs, bp, bounds):
+        self.grid, self.F, self.G, self.bs, self.bp, self.bounds = grid, F, G, bs, bp, bounds
+        self.gap = np.zeros(4)
+
+    def copy(self):
+        other = _Cells(self.grid, self.F.copy(), self.G.copy(), self.bs.copy(), self.bp, self.bounds)
+        other.gap = self.gap.copy()
+        return other
+
+    def arriving(self, L):
+        """The waves arriving at the driven end over the next ``L`` steps without drive (a copy run)."""
+        _, field, _ = _steps(self.grid, self.F.copy(), self.G.copy(), self.bs.copy(), self.bp, self.gap,
+                             np.zeros(L), True, self.bounds)
+        column = field[:, 0].copy()
+        column[0] = self.G[0]
+        return np.add.accumulate(column)  # F[0] = 0 - G[0] after a step without drive
+
+    def drive_input(self, arriving, k, t0, L, frac=1.0):
+        """The drive's breaks over the ``L`` steps from step ``k`` (the blow from ``t0``), the wave
+        arriving at the driven end on each interval (``-2 G / Z_0``), and each step's first interval:
+        here the steps themselves."""
+        dt = self.grid.cell_time
+        breaks = t0 + dt * np.arange(k, k + L + 1)
+        breaks[L] = t0 + (k + L - 1 + frac) * dt
+        return breaks, -2.0 * arriving[:L] / float(self.grid.Z[0]), np.arange(L)
+
+    def run(self, drive, frac=1.0):
+        """``drive.size`` steps; the shank's force on the last."""
+        self.gap, _, shank = _steps(self.grid, self.F, self.G, self.bs, self.bp, self.gap, drive, False,
+                                    self.bounds)
+        return shank
+
+    def waves(self):
+        return self.F, self.G
+
+
+class _Slots:
+    """The slot lattice's state between the coupled blow's chunks
+    (:class:`~impactbar.laws.rodrock._rockslots.SlotLattice`)."""
+
+    def __init__(self, grid, F, G, bs, bp, lattice=None):
+        from ._rockslots import SlotLattice
+
+        self.grid, self.bp = grid, bp
+        if lattice is None:
+            lattice = SlotLattice(grid.Z, grid.bounds, grid.delays, F, G, 0.0, bs, bp)
+        self.lat = lattice
+        self.F, self.G = F, G
+
+    @property
+    def bs(self):
+        return self.lat.bs
+
+    def copy(self):
+        other = _Slots(self.grid, self.F.copy(), self.G.copy(), None, self.bp, self.lat.copy())
+        return other
+
+    def arriving(self, L):
+        return self.lat.copy().run(self.grid.cell_time, np.zeros(L), arriving_slots=True)["arriving_slots"]
+
+    def drive_input(self, arriving, k, t0, L, frac=1.0):
+        """:meth:`_Cells.drive_input` with the arriving wave's slots: a break at each slot's edge
+        inside a step where the wave jumps by more than :data:`DRIVE_JUMP` of its largest value over
+        the chunk; each interval's value the wave's average over it (up to the end, inside the last
+        step where ``frac < 1``)."""
+        dt = self.grid.cell_time
+        w = np.concatenate([a[0] for a in arriving[:L]])
+        g = np.concatenate([a[1] for a in arriving[:L]])
+        counts = np.array([a[0].size for a in arriving[:L]])
+        first = np.concatenate(([0], np.cumsum(counts)[:-1]))
+        step = np.repeat(np.arange(L), counts)
+        within = np.cumsum(w) - w - np.repeat(np.cumsum(w)[first] - w[first], counts)  # each slot's start
+        edges = k + step + within
+        keep = np.zeros(w.size, dtype=bool)
+        keep[first] = True
+        keep[1:] |= np.abs(np.diff(g)) > DRIVE_JUMP * max(float(np.max(np.abs(g))), 1e-300)
+        if frac < 1.0:  # (the end inside the last step: the slots up to it, the last one's part)
+            end = k + L - 1 + frac
+            w = np.clip(end - edges, 0.0, w)
+            keep &= w > 0.0
+        lo = np.flatnonzero(keep)
+        width = np.add.reduceat(w, lo)
+        values = np.add.reduceat(g * w, lo) / width
+        starts = np.searchsorted(lo, first[:L])
+        breaks = t0 + dt * np.concatenate((edges[lo], [k + L - 1 + frac]))
+        return breaks, -2.0 * values / float(self.grid.Z[0]), starts
+
+    def run(self, drive, frac=1.0):
+        out = self.lat.run(self.grid.cell_time, drive, frac=frac)
+        self.F, self.G = out["F"], out["G"]
+        return float(out["junc"][-1, JUNC_SHANK])
+
+    def waves(self):
+        return self.F, self.G
+
+
+def _steps_to_free(cells, drive, k, h):
+    """The lattice ``cells`` (:class:`_Cells`, :class:`_Slots`) run over the chunk of ``drive.size``
+    steps from step ``k``, the piston tested for free for good
+    (:func:`~impactbar.laws.rodrock._rockloop.piston_free`, the contact open on the step before) at
+    the first step end at or after each multiple of ``h`` only (the exact blow's instants,
+    :func:`end_window`): ``ran``, the chunk's steps up to the first such end (-1: none within it),
+    the lattice then."""
     from ._rockloop import piston_free
     from .grid import whole_steps
 
+    grid = cells.grid
     dt = grid.cell_time
     L = drive.size
     n_p = grid.piston_cells
@@ -118,15 +231,16 @@ def _steps_to_free(grid, F, G, bs, bp, gap, drive, bounds, k, h):
     while done < L:
         test = whole_steps(j * h, dt) - k  # (the chunk's step after which the j-th end is tested)
         stop = min(max(test, done + 1), L)
-        gap, _, shank = _steps(grid, F, G, bs, bp, gap, drive[done:stop], False, bounds)
+        shank = cells.run(drive[done:stop])
         done = stop
         if done == test:
             j += 1
-            if shank == 0.0 and piston_free(F, G, grid.Z, n_p, bs, bp, dt):
-                return gap, done
+            F, G = cells.waves()
+            if shank == 0.0 and piston_free(F, G, grid.Z, n_p, cells.bs, cells.bp, dt):
+                return done
         elif test < done:
             j += 1
-    return gap, -1
+    return -1
 
 
 def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
@@ -182,12 +296,12 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     F, G = bm.fields(q, v)
     F0, G0 = F.copy(), G.copy()
     bs, bp = _bit_arrays(grid, law)
-    gap = np.zeros(4)  # the contact's state (_steps)
+    bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
+    cells = _Slots(grid, F, G, bs, bp) if grid.slots else _Cells(grid, F, G, bs, bp, bounds)
     m = causal_cells(grid.Z, n_p)
     # (a contact that reads the waves arriving on its next step, grid.locate, answers a step sooner)
     chunk = max(1, 2 * m - 1) if grid.locate else 2 * m
     averages = bm.drive
-    bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
     w = -float(model.drive_weights @ q)
     st = state
     follow = drive.abilities.end_flight
@@ -196,41 +310,43 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
                               "(no end_flight in its abilities); it runs under an instantaneous impact "
                               "law only")
     pieces, events = [], []
-    k, end, ended = 0, n_max, False
+    k, end, ended, frac = 0, n_max, False, 1.0
     while k < end:
         L = min(chunk, end - k)
         # 1. the waves arriving at the driven end over the chunk (not caused by its drive)
-        _, field, _ = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True, bounds)
-        column = field[:, 0].copy()
-        column[0] = G[0]
-        arriving = np.add.accumulate(column)  # F[0] = 0 - G[0] after a step without drive
+        arriving = cells.arriving(L)
         # 2. the drive over the chunk, the driven end at u_t(0) = (p - 2 G_k) / Z_0
-        breaks = t0 + dt * np.arange(k, k + L + 1)
-        fl = follow(model, st, breaks, w, -2.0 * arriving / Z0, Z0, settings)
-        averages[k:k + L] = fl.impulses / dt
+        breaks, incoming, starts = cells.drive_input(arriving, k, t0, L)
+        fl = follow(model, st, breaks, w, incoming, Z0, settings)
+        averages[k:k + L] = np.add.reduceat(fl.impulses, starts) / dt
         # 3. the lattice on over the chunk with the drive's averages (to the piston free for good)
-        start = (F.copy(), G.copy(), bs.copy(), gap.copy())
+        start = cells.copy()
         ran = -1
         if free and not ended:
-            gap, ran = _steps_to_free(grid, F, G, bs, bp, gap, averages[k:k + L], bounds, k, h)
+            ran = _steps_to_free(cells, averages[k:k + L], k, h)
         else:
-            gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
+            cells.run(averages[k:k + L])
         if ran >= 0:  # free for good after `ran` steps: the blow ends there (or `later` on)
             ended, end = True, min(k + ran + later, n_max)
-        if end - k < L:  # the drive and the lattice again over the chunk's part up to the end
+            if grid.slots and later == 0:  # the slots end at the multiple of h itself, inside its step
+                j = math.floor((end - 1) * dt / h * (1.0 + 1e-12)) + 1
+                frac = min(max((j * h - (end - 1) * dt) / dt, 1e-9), 1.0)
+        if end - k < L or frac < 1.0:  # the drive and the lattice again over the chunk's part up to the end
             L = end - k
-            F[:], G[:], bs[:], gap = start
-            fl = follow(model, st, breaks[:L + 1], w, -2.0 * arriving[:L] / Z0, Z0, settings)
-            averages[k:k + L] = fl.impulses / dt
-            gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
+            cells = start
+            breaks, incoming, starts = cells.drive_input(arriving, k, t0, L, frac)
+            fl = follow(model, st, breaks, w, incoming, Z0, settings)
+            averages[k:k + L] = np.add.reduceat(fl.impulses, starts) / dt
+            cells.run(averages[k:k + L], frac)
         elif 0 <= ran < L:  # the end moved on past the chunk: the whole chunk without the end's test
-            F[:], G[:], bs[:], gap = start
-            gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
+            cells = start
+            cells.run(averages[k:k + L])
         st, w = fl.state, fl.w
         pieces += fl.pieces
         events += fl.events
         k += L
     bm.n_max = k
+    bm.end_fraction = frac
     rec = bm.contact(q, v)
     if ended:
         rec.blow = dataclasses.replace(rec.blow, ended_by="separated")  # (the piston free for good)
@@ -250,9 +366,17 @@ def _rigid_gaps(model, q, v, blow, averages, t0):
     dt = blow.cell_time
     n = blow.shank_forces.size
     force = averages[:n] - blow.shank_forces
-    vel = float(v[0]) + dt * np.concatenate(([0.0], np.cumsum(force)))
-    pos = float(q[0]) + dt * np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]))))
-    times = t0 + dt * np.arange(n + 1)
+    if blow.times[-1] < n * dt:  # (the slot lattice's end inside its last step: that part of it)
+        dts = np.full(n, dt)
+        dts[-1] = blow.times[-1] - (n - 1) * dt
+        force[-1] = averages[n - 1] * dt / dts[-1] - blow.shank_forces[-1]
+        vel = float(v[0]) + np.concatenate(([0.0], np.cumsum(force * dts)))
+        pos = float(q[0]) + np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]) * dts)))
+        times = t0 + blow.times
+    else:
+        vel = float(v[0]) + dt * np.concatenate(([0.0], np.cumsum(force)))
+        pos = float(q[0]) + dt * np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]))))
+        times = t0 + dt * np.arange(n + 1)
     # where the momentum changes sign inside a step, the rigid coordinate turns there
     turn = (vel[:-1] * vel[1:] < 0.0) & (force != 0.0)
     if np.any(turn):

@@ -77,6 +77,13 @@ class BlowGrid:
         Whether a piston-shank re-contact is located inside its step (the contact's force from
         where the gap closes, averaged over the step; ``RodRock(contact_events="inside")``), else
         from the next step (default).
+    slots : bool
+        Whether the blow runs on the slot lattice (``RodRock(contact_events="slots")``,
+        :mod:`~impactbar.laws.rodrock._rockslots`): the events inside the steps, each rod segment its
+        whole cells (``floor``, at least one) and a delay of the rest.
+    delays : tuple of (int, float)
+        With ``slots``, each rod segment's index and the fraction of a step ``0 <= delta < 1`` its
+        travel time exceeds its cells' by; else empty.
     """
 
     s: float
@@ -91,12 +98,17 @@ class BlowGrid:
     piston_segment_cells: tuple = (1,)
     piston_travel: np.ndarray | None = None
     locate: bool = False
+    slots: bool = False
+    delays: tuple = ()
 
     @property
     def length_error(self) -> float:
         """Largest relative change of a segment's travel time (the rod's and the piston's) by
-        rounding it to whole cells."""
-        cells = np.array(self.segment_cells) * self.cell_time
+        rounding it to whole cells (on the slot lattice, a rod segment's cells and its delay)."""
+        held = np.array(self.segment_cells, dtype=float)
+        for i, d in self.delays:
+            held[i] += d
+        cells = held * self.cell_time
         err = float(np.max(np.abs(cells - self.travel) / self.travel))
         if self.piston_travel is not None:
             pc = np.array(self.piston_segment_cells) * self.cell_time
@@ -104,9 +116,10 @@ class BlowGrid:
         return err
 
 
-def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None, locate=False) -> BlowGrid:
+def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None, locate=False,
+              slots=False) -> BlowGrid:
     """The cell grid of :func:`rod_rock_blow` (its parameters of the same names; the piston's cells:
-    :func:`~impactbar.laws.rodrock._piston.piston_cells`; ``locate``: ``BlowGrid.locate``)."""
+    :func:`~impactbar.laws.rodrock._piston.piston_cells`; ``locate``, ``slots``: ``BlowGrid``'s)."""
     with np.errstate(over="ignore"):  # a wave speed near 0: an infinite travel time, refused below
         travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
@@ -120,7 +133,13 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None
     n_p = int(cells_per_piston)
     dt = Tp / n_p
     _check_blow_size(n_p + float(np.sum(travel)) / dt, 1, False)  # the steps: in solve_blow
-    seg_cells = [max(1, round(T / dt)) for T in travel]
+    delays = ()
+    if slots:  # each segment its whole cells and a delay of the rest (_rockslots)
+        seg_cells = [max(1, math.floor(T / dt * (1.0 + 1e-12))) for T in travel]
+        delays = tuple((i, max(float(T / dt) - n, 0.0))
+                       for i, (T, n) in enumerate(zip(travel, seg_cells, strict=True)))
+    else:
+        seg_cells = [max(1, round(T / dt)) for T in travel]
     pieces = list(zip(seg_cells, impedances, strict=True))
     dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
                         + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
@@ -128,11 +147,12 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None
     p_cells, Z_p = piston_cells(s, p_len, p_mu, n_p)
     Z = np.concatenate([Z_p] + [np.full(n, s * z) for n, z in pieces])
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
-    static = float(sum(n * dt / (2.0 * s * z) for n, z in pieces))
+    held = [n + d for n, (_, d) in zip(seg_cells, delays, strict=True)] if delays else seg_cells
+    static = float(sum(n * dt / (2.0 * s * z) for n, z in zip(held, impedances, strict=True)))
     return BlowGrid(s=float(s), cell_time=dt, piston_cells=n_p, segment_cells=tuple(seg_cells), Z=Z,
                     bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static,
                     piston_segment_cells=tuple(int(n) for n in p_cells), piston_travel=p_travel,
-                    locate=bool(locate))
+                    locate=bool(locate), slots=bool(slots), delays=delays)
 
 
 def incident_steps(shank_forces, starts, round_trip: float) -> int:
