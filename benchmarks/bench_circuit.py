@@ -32,7 +32,8 @@ the circuit (``bench_coupled_exact.py``), the wave law's blow under the circuit
 (``bench_first_call.py``) and the rigid bar's fixed cost against a compiled minimal loop
 (``bench_fast_paths.py``); under each table, each goal's number on this tree against the goal: met,
 or missed and why (measured: :data:`WHY_CONTINUATION`, :data:`WHY_ROCK_COMPILE`). Some half an hour
-on the 2-core machine.
+on the 2-core machine; ``--only TEXT`` runs the goals whose text holds ``TEXT`` (e.g. ``--only "the
+circuit on rock"``).
 """
 
 from __future__ import annotations
@@ -279,12 +280,17 @@ WHY_EXACT_COST = (
     "the travel time past where its force is right again in the next, which only the driven end's "
     "wave re-sent in the solver's pool would spare (HISTORY.md)")
 WHY_DEFAULT_DISTANCE = (
-    "the default's blows are the lattice's at the example's 8 cells a piston, ended where the exact "
-    "blows end (driven_end='free'): 1.4e-3 from the exact orbit (ended at the law's window 4.3e-3), "
-    "on 64 and 128 cells 2.0e-5: the rod's segments rounded to whole cells (1.9 % of a travel time on "
-    "8 cells, 0.13 % on 64 and 128) and the contact's re-contacts and separations at step ends, each "
-    "first order (benchmarks/probes/lattice_order.py; located inside their steps, "
-    "contact_events='inside', the orbit is farther: 2.6e-3 on 8 cells)")
+    "the default's blows are the example's slot lattice at 8 cells a piston (contact_events='slots': "
+    "every event at its own instant inside its step, the rod's segments exact, the drive meeting the "
+    "arriving wave's slots), ended at the exact blows' instant: 2.0e-6 from the exact orbit, 3.1e-7 on "
+    "16 cells; on the plain lattice (contact_events='step') 1.4e-3 on 8 cells, 2.0e-5 on 64 "
+    "(benchmarks/HISTORY.md)")
+
+WHY_SLOTS_COST = (
+    "the example names the slot lattice (contact_events='slots', within 2.0e-6 of the exact orbit "
+    "where the plain lattice is 1.4e-3 off): its blows' merges and cuts some 8 times a plain blow's "
+    "cost, and the circuit's flights take the arriving wave's slots as breaks; the plain lattice's "
+    "orbit (contact_events='step') meets the goal, 0.26 s (benchmarks/HISTORY.md)")
 
 WHY_DRILL = (
     "(the same drill on the preset's ramped valve, beside the goal's spool drill) the drill's circuit "
@@ -321,7 +327,7 @@ GOALS = (
       ("ramped-valve drill / preset (x)", DRILL_GOAL, WHY_DRILL))),
     ("the circuit on rock (examples/circuit_drifter_rock.toml) <= 0.3 s an orbit (CPU s)",
      "bench_circuit_laws.py", ("--against", "{ref}", "--rounds", "2"),
-     (("find_orbit circuit", 0.3, ""),)),
+     (("find_orbit circuit", 0.3, WHY_SLOTS_COST),)),
     ("the exact blow under the circuit (method='exact'; the lattice's orbit some 65 times cheaper a blow)",
      "bench_coupled_exact.py", ("--against", "{src}"), (WHY_LATTICE,)),
     ("the circuit on rock: the exact orbit at most 10x the default's cost, the default within 1e-5 of "
@@ -372,9 +378,10 @@ def verdicts(table: str, rows) -> list[str]:
     return out
 
 
-def goals(ref: str) -> None:
-    """Each goal, then its script's table against the git ref ``ref`` (module docstring), then each
-    of its numbers against the goal: met, or missed and why."""
+def goals(ref: str, only: str | None = None) -> None:
+    """Each goal (those whose text holds ``only``, where given), then its script's table against the
+    git ref ``ref`` (module docstring), then each of its numbers against the goal: met, or missed and
+    why."""
     import subprocess
     import sys
     from pathlib import Path
@@ -384,6 +391,8 @@ def goals(ref: str) -> None:
     here = Path(__file__).resolve().parent
     src = ref_tree(ref)
     for goal, script, args, rows in GOALS:
+        if only is not None and only not in goal:
+            continue
         shown = " ".join(args).format(ref=ref, src=f"<{ref}>/src")
         print(f"\n## {goal}\n   python benchmarks/{script} {shown}", flush=True)
         argv = [a.format(ref=ref, src=src) for a in args]
@@ -398,6 +407,7 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--goals", metavar="REF", help="every goal's benchmark against the git ref REF")
+    parser.add_argument("--only", metavar="TEXT", help="with --goals: the goals whose text holds TEXT")
     parser.add_argument("--drill", action="store_true",
                         help="only the example drills' rigid orbits against the preset's")
     parser.add_argument("--against", metavar="REF_OR_SRC",
@@ -412,6 +422,6 @@ if __name__ == "__main__":
     elif a.drill:
         print_drill(against=a.against, rounds=a.rounds)
     elif a.goals:
-        goals(a.goals)
+        goals(a.goals, a.only)
     else:
         main(a.quick)

@@ -34,6 +34,7 @@ def arrival(values=None):
     law's window on every tree, where the law has ``driven_end``)."""
     cfg, _ = read_config(str(EXAMPLE))
     del cfg["rock"]["cells_per_piston"]
+    cfg["rock"].pop("contact_events", None)  # (the lattice's plain events: the arrival as measured)
     if values:
         cfg = with_values(cfg, values)
     drifter = build(cfg)

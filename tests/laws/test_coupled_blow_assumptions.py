@@ -47,6 +47,7 @@ def arrival():
     lmodel, drive = lattice.model(), lattice.drive()
     orbit = ib.find_orbit(lmodel, drive)
     del cfg["rock"]["cells_per_piston"]
+    cfg["rock"].pop("contact_events", None)  # (the lattice's plain events: the arrival as measured)
     m = build(cfg).model()
     exact = m.with_(impact=dataclasses.replace(m.law, method="exact"))
     M = lmodel.n_modes + 1
@@ -136,9 +137,9 @@ def test_the_work_on_rock_is_the_work_dissipated_in_it(arrival, blows):
 def test_the_lattice_at_the_same_arrival(arrival, blows):
     orbit = arrival[0]
     blow, _ = blows
-    more = float(orbit.contacts[0].work_on_rock) / float(blow.record.work_on_rock) - 1.0
-    assert more > 0.0
-    assert _agrees(_quoted(r"does \$([0-9.]+\\times10\^\{-?[0-9]+\})\$ more work on the rock"), more)
+    less = 1.0 - float(orbit.contacts[0].work_on_rock) / float(blow.record.work_on_rock)
+    assert less > 0.0
+    assert _agrees(_quoted(r"does \$([0-9.]+\\times10\^\{-?[0-9]+\})\$ less work on the rock"), less)
     stored = blow.record.rock_stored_energy / blow.record.energy_at_impact
     assert _agrees(_quoted(r"\(([0-9.]+) % of the impact energy at the\s*exact blow's end"), 100 * stored)
 
