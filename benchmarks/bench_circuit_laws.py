@@ -25,15 +25,13 @@ import argparse
 import json
 import sys
 import time
-import tomllib
 from pathlib import Path
 
 import numpy as np
-from _timing import fresh_runs, ref_tree  # this folder's shared runner
+from _timing import example_drifter, fresh_runs, ref_tree  # this folder's shared runner
 
 from impactbar import InitialState, PositionSwitchedDrive, find_orbit, simulate
 from impactbar.loads import FourierLoad
-from impactbar.physical import CircuitDrifter
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
@@ -61,8 +59,7 @@ def blows(model, drive, state, q, v, reps=3):
 
 def cases(quick=False) -> dict:
     """``{case: CPU seconds}`` (module docstring)."""
-    with open(EXAMPLE, "rb") as f:
-        d = CircuitDrifter.from_config(tomllib.load(f))
+    d = example_drifter(EXAMPLE)
     model, drive = d.model(), d.drive()
     point = d.orbit()
     o = point.orbit

@@ -23,10 +23,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
-import tomllib
 from pathlib import Path
 
-from _timing import against_parser, fresh_runs  # this folder's shared runner of two trees
+from _timing import against_parser, example_drifter, fresh_runs  # this folder's shared runner of two trees
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
@@ -55,10 +54,8 @@ def solve(drifter, model, reps: int):
 
 def measure(reps: int) -> dict:
     """Both orbits' CPU seconds and figures, and the exact orbit's multipliers' moduli."""
-    from impactbar.physical import CircuitDrifter
 
-    with open(EXAMPLE, "rb") as f:
-        drifter = CircuitDrifter.from_config(tomllib.load(f))
+    drifter = example_drifter(EXAMPLE)
     model = drifter.model()
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
     default, t_default = solve(drifter, model, reps)
