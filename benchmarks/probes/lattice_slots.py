@@ -66,7 +66,8 @@ this loop compiled, the slots rows of preallocated arrays, the bit ``_rockloop``
 by least loss from a heap on a linked list of the slots; resumable since, and with the merges' energy
 in its grid loss). Measured when it was this probe's own kernel, on 10e8756b (``--compiled --cells
 8 16 32 --delays-up-to 32 --max-slots 12``, one process, the machine's 2 cores shared with a test
-run, load 3 to 3.5): its ``v_after``, ``q_after`` and work are the numpy loop's bit for bit (relative difference 0.0 in all nine cases, the 995,312 merges on
+run, load 3 to 3.5): its ``v_after``, ``q_after`` and work are the numpy loop's
+bit for bit (relative difference 0.0 in all nine cases, the 995,312 merges on
 32 cells included), and the CPU ms of one blow (``law.contact``, best of 5 after a warm-up):
 
 | cells | library lattice, step | slots | slots, delayed, every edge | slots, delayed, jump 1e-4 |
