@@ -46,6 +46,10 @@ __all__ = ["driven_rock_contact", "causal_cells", "END_DELAY"]
 #: the driven end jumps by more than this fraction of its largest value over the chunk.
 DRIVE_JUMP = 1e-4
 
+#: The slot lattice's coupled blow joins an interval of the drive narrower than this fraction of a
+#: step to its neighbour.
+SLIVER = 1e-9
+
 #: The blow's end moved this fraction of the law's window past where the piston is free for good
 #: (0, the default: there; the orbit's sensitivity to the end, theory §11).
 END_DELAY = 0.0
@@ -196,7 +200,18 @@ class _Slots:
             end = k + L - 1 + frac
             w = np.clip(end - edges, 0.0, w)
             keep &= w > 0.0
+        is_first = np.zeros(w.size, dtype=bool)
+        is_first[first] = True
+        # (an interval narrower than SLIVER of a step joins its neighbour: the circuit's integrator
+        # cannot step across a width at its times' rounding; a step's first edge stays)
         lo = np.flatnonzero(keep)
+        at = np.concatenate((edges[lo], [k + L - 1 + frac]))
+        narrow = np.diff(at) < SLIVER
+        drop = np.zeros(lo.size, dtype=bool)
+        drop[1:] = narrow[:-1] & ~is_first[lo[1:]]  # (its start too near the one before)
+        drop[:-1] |= narrow[1:] & is_first[lo[1:]] & ~is_first[lo[:-1]]  # (the one before a step's first)
+        drop[-1] |= narrow[-1] & ~is_first[lo[-1]]  # (the last, too near the end)
+        lo = lo[~drop]
         width = np.add.reduceat(w, lo)
         values = np.add.reduceat(g * w, lo) / width
         starts = np.searchsorted(lo, first[:L])
