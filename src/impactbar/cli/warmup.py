@@ -33,7 +33,7 @@ KERNELS = {
     "rod and rock orbits, lattice": 22,
     "rigid sweep chunks": 25,
     "oil circuit": 81,
-    "oil circuit on rod and rock": 54,
+    "oil circuit on rod and rock": 47,
     "piston optimiser": 11,
 }
 
