@@ -1,5 +1,5 @@
-r"""The rod-rock blow's lattice with *slots* (theory §11, "Events inside the steps"):
-``RodRock(contact_events="slots")``.
+r"""The rod-rock blow's lattice with *slots* (theory §11, "The coupled blow": the rod-rock law's slot
+lattice): ``RodRock(contact_events="slots")``.
 
 The lattice of :mod:`._rockloop` holds one value of each characteristic in each cell, so that an
 event inside a step (the piston meeting the shank again, the bit landing, the rock changing branch)
@@ -20,7 +20,9 @@ one value of each characteristic per slot, the waves piecewise constant between 
   slot's integral of the wave one step and ``delta`` earlier), and the slots are cut where a delayed
   wave jumps by more than :data:`CUT_JUMP` of the largest wave;
 - past :data:`MAX_SLOTS` slots, the two adjacent slots whose width-weighted average loses least (the
-  L2 difference of their values over all cells times ``w_1 w_2 / (w_1 + w_2)``) are merged.
+  L2 difference of their values over all cells times ``w_1 w_2 / (w_1 + w_2)``) are merged, and the
+  energy each merge takes is booked with the grid's loss, as is what the cells' averages at the end
+  drop from the slots'; the waves held in the delays are the rod's (the blow's account closes).
 
 The loop is resumable: its state (:class:`SlotLattice`) is handed from one run of steps to the next,
 as the coupled blow's chunks need (:mod:`.coupled`), and its last step may end inside the step
