@@ -287,7 +287,7 @@ def _read_numbers(stored) -> list:
     older script holds the numbers alone)."""
     numbers = stored["numbers"] if isinstance(stored, dict) else stored
     paths = stored["paths"] if isinstance(stored, dict) else [None] * len(numbers)
-    return [(None if p is None else tuple(p), float(x) if not x.startswith("'") else x)
+    return [(None if p is None else tuple(p), float(x) if not x.startswith(("'", '"')) else x)
             for p, x in zip(paths, numbers, strict=True)]
 
 
