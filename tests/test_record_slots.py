@@ -94,9 +94,9 @@ NOT_RECORDS = {
     "laws/rodrock/grid.py": {"off", "times"},  # sequences' first and last entries
     "laws/rodrock/contact.py": {"qa"},  # the rigid mode
     # the far end's cell; a step's (widths, values) pair (a); the blow's last step (times, dts, force,
-    # shank_forces); the drive's last interval (drop, narrow, lo)
-    "laws/rodrock/coupled.py": {"column", "a", "times", "dts", "force", "shank_forces", "drop", "narrow",
-                                "lo"},
+    # shank_forces, vel, pos); the drive's last interval (drop, narrow, lo)
+    "laws/rodrock/coupled.py": {"column", "a", "times", "force", "shank_forces", "vel", "pos", "drop",
+                                "narrow", "lo"},
     "laws/rodrock/coupled_exact.py": {"travel", "xv"},  # the first segment's; a grid's ends
     "laws/rodrock/coupled_tangent.py": {"travel", "c", "y_end"},  # the first segment's; the rigid
     # mode's weight; the last piece's end

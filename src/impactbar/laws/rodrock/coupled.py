@@ -158,24 +158,22 @@ class _Cells:
 
 class _Slots:
     """The slot lattice's state between the coupled blow's chunks
-    (:class:`~impactbar.laws.rodrock._rockslots.SlotLattice`)."""
+    (:class:`~impactbar.laws.rodrock._rockslots.SlotLattice` ``lat``), and the cells' averages after
+    its last run."""
 
-    def __init__(self, grid, F, G, bs, bp, lattice=None):
-        from ._rockslots import SlotLattice
-
-        self.grid, self.bp = grid, bp
-        if lattice is None:
-            lattice = SlotLattice(grid.Z, grid.bounds, grid.delays, F, G, 0.0, bs, bp)
-        self.lat = lattice
-        self.F, self.G = F, G
+    def __init__(self, grid, lat):
+        self.grid, self.lat, self._waves = grid, lat, None
 
     @property
     def bs(self):
         return self.lat.bs
 
+    @property
+    def bp(self):
+        return self.lat.bp
+
     def copy(self):
-        other = _Slots(self.grid, self.F.copy(), self.G.copy(), None, self.bp, self.lat.copy())
-        return other
+        return _Slots(self.grid, self.lat.copy())
 
     def arriving(self, L):
         return self.lat.copy().run(self.grid.cell_time, np.zeros(L), arriving_slots=True)["arriving_slots"]
@@ -220,11 +218,11 @@ class _Slots:
 
     def run(self, drive, frac=1.0):
         out = self.lat.run(self.grid.cell_time, drive, frac=frac)
-        self.F, self.G = out["F"], out["G"]
+        self._waves = out["F"], out["G"]
         return float(out["junc"][-1, JUNC_SHANK])
 
     def waves(self):
-        return self.F, self.G
+        return self._waves
 
 
 def _steps_to_free(cells, drive, k, h):
@@ -232,8 +230,8 @@ def _steps_to_free(cells, drive, k, h):
     steps from step ``k``, the piston tested for free for good
     (:func:`~impactbar.laws.rodrock._rockloop.piston_free`, the contact open on the step before) at
     the first step end at or after each multiple of ``h`` only (the exact blow's instants,
-    :func:`end_window`): ``ran``, the chunk's steps up to the first such end (-1: none within it),
-    the lattice then."""
+    :func:`end_window`): ``(ran, at)``, the chunk's steps up to the first such end and that
+    multiple of ``h`` (``(-1, None)``: none within it), the lattice then."""
     from ._rockloop import piston_free
     from .grid import whole_steps
 
@@ -252,10 +250,10 @@ def _steps_to_free(cells, drive, k, h):
             j += 1
             F, G = cells.waves()
             if shank == 0.0 and piston_free(F, G, grid.Z, n_p, cells.bs, cells.bp, dt):
-                return done
+                return done, (j - 1) * h
         elif test < done:
             j += 1
-    return -1
+    return -1, None
 
 
 def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
@@ -312,7 +310,12 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     F0, G0 = F.copy(), G.copy()
     bs, bp = _bit_arrays(grid, law)
     bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
-    cells = _Slots(grid, F, G, bs, bp) if grid.slots else _Cells(grid, F, G, bs, bp, bounds)
+    if grid.slots:
+        from ._rockslots import SlotLattice
+
+        cells = _Slots(grid, SlotLattice(grid.Z, grid.bounds, grid.delays, F, G, 0.0, bs, bp))
+    else:
+        cells = _Cells(grid, F, G, bs, bp, bounds)
     m = causal_cells(grid.Z, n_p)
     # (a contact that reads the waves arriving on its next step, grid.locate, answers a step sooner)
     chunk = max(1, 2 * m - 1) if grid.locate else 2 * m
@@ -338,14 +341,13 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         start = cells.copy()
         ran = -1
         if free and not ended:
-            ran = _steps_to_free(cells, averages[k:k + L], k, h)
+            ran, at = _steps_to_free(cells, averages[k:k + L], k, h)
         else:
             cells.run(averages[k:k + L])
         if ran >= 0:  # free for good after `ran` steps: the blow ends there (or `later` on)
             ended, end = True, min(k + ran + later, n_max)
             if grid.slots and later == 0:  # the slots end at the multiple of h itself, inside its step
-                j = math.floor((end - 1) * dt / h * (1.0 + 1e-12)) + 1
-                frac = min(max((j * h - (end - 1) * dt) / dt, 1e-9), 1.0)
+                frac = min(max((at - (end - 1) * dt) / dt, 1e-9), 1.0)
         if end - k < L or frac < 1.0:  # the drive and the lattice again over the chunk's part up to the end
             L = end - k
             cells = start
@@ -381,17 +383,15 @@ def _rigid_gaps(model, q, v, blow, averages, t0):
     dt = blow.cell_time
     n = blow.shank_forces.size
     force = averages[:n] - blow.shank_forces
-    if blow.times[-1] < n * dt:  # (the slot lattice's end inside its last step: that part of it)
-        dts = np.full(n, dt)
-        dts[-1] = blow.times[-1] - (n - 1) * dt
-        force[-1] = averages[n - 1] * dt / dts[-1] - blow.shank_forces[-1]
-        vel = float(v[0]) + np.concatenate(([0.0], np.cumsum(force * dts)))
-        pos = float(q[0]) + np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]) * dts)))
-        times = t0 + blow.times
-    else:
-        vel = float(v[0]) + dt * np.concatenate(([0.0], np.cumsum(force)))
-        pos = float(q[0]) + dt * np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]))))
-        times = t0 + dt * np.arange(n + 1)
+    vel = float(v[0]) + dt * np.concatenate(([0.0], np.cumsum(force)))
+    pos = float(q[0]) + dt * np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]))))
+    times = t0 + dt * np.arange(n + 1)
+    if blow.times[-1] < n * dt:  # the slot lattice's end inside its last step: that step's part only
+        part = blow.times[-1] - (n - 1) * dt
+        force[-1] = averages[n - 1] * dt / part - blow.shank_forces[-1]
+        vel[-1] = vel[-2] + force[-1] * part
+        pos[-1] = pos[-2] + 0.5 * (vel[-2] + vel[-1]) * part
+        times[-1] = t0 + blow.times[-1]
     # where the momentum changes sign inside a step, the rigid coordinate turns there
     turn = (vel[:-1] * vel[1:] < 0.0) & (force != 0.0)
     if np.any(turn):
