@@ -476,12 +476,17 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     static = grid.static * feed * feed
     F, G, junc, bitf, pen, fld, acc = _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap,
                                            record_field, end_fraction)
-    u_shank, grid_loss, ended, gap, drive_work, *held = acc  # (held: the slot lattice's delays' waves)
+    u_shank, grid_loss, ended, gap, drive_work, *slots = acc
     shank = junc[:, JUNC_SHANK]
     n = shank.size
     e = (F * F + G * G) / Z * dt
     piston_e = float(np.sum(e[:n_p]))
-    rod_waves = float(np.sum(e[n_p:])) + sum(held)
+    rod_waves = float(np.sum(e[n_p:]))
+    if slots:  # the slot lattice: what the cells' averages drop from its slots' energies is the grid's
+        # loss; the waves held in its delays are the rod's
+        piston_slots, rod_slots, held = slots
+        grid_loss += (piston_slots - piston_e) + (rod_slots - rod_waves)
+        rod_waves += held
     feed_work = feed * u_shank
     rock0 = feed * feed / (2.0 * k_u)  # the rock's recoverable elastic energy under the feed
     rod_energy = rod_waves + feed * (u_shank - (bit.p - p_start)) + static + 0.5 * bit_mass * bit.w * bit.w
@@ -603,8 +608,9 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, re
 
 def _slots_loop(grid, F, G, bit, n_max, stop, quiet, gap0, drive, record_field, end_fraction=1.0):
     """The blow's loop on the slot lattice (:class:`~impactbar.laws.rodrock._rockslots.SlotLattice`,
-    ``grid.slots``): the results of :func:`_compiled_loop`, the waves the cells' averages; the last
-    step run to ``end_fraction`` of it."""
+    ``grid.slots``): the results of :func:`_compiled_loop`, the waves the cells' averages, and after
+    its accounts the slots' energies in the piston and the rod and the delays' (``SlotLattice.energies``);
+    the last step run to ``end_fraction`` of it."""
     from ._rockslots import SlotLattice
 
     bs, bp = _bit_records(bit)
@@ -613,15 +619,9 @@ def _slots_loop(grid, F, G, bit, n_max, stop, quiet, gap0, drive, record_field, 
                   record_field=record_field)
     _set_bit(bit, lat.bs)
     u_shank, grid_loss, gap, work = lat.totals()
-    # the energy the cells' averages drop from the slots' booked with the grid's loss; the waves held
-    # in the delays are the rod's
-    piston, rod, held = lat.energies()
-    Fa, Ga, Z, n_p = out["F"], out["G"], grid.Z, grid.piston_cells
-    e = (Fa * Fa + Ga * Ga) / Z * grid.cell_time
-    grid_loss += (piston - float(np.sum(e[:n_p]))) + (rod - float(np.sum(e[n_p:])))
     ended = ("t_max", "energy", "separated")[lat.ended]
-    return (Fa, Ga, out["junc"], out["bitf"], out["pen"], out["field"],
-            (u_shank, grid_loss, ended, gap, work, held))
+    return (out["F"], out["G"], out["junc"], out["bitf"], out["pen"], out["field"],
+            (u_shank, grid_loss, ended, gap, work, *lat.energies()))
 
 
 def _set_bit(bit, bs):
