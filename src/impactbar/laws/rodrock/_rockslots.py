@@ -42,17 +42,13 @@ import numpy as np
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._records import (
-    BIT_BRANCH,
     BIT_P,
-    BIT_PPERM,
     BIT_W,
     BIT_WORK,
     BITP_FEED,
-    BITP_K,
-    BITP_KU,
     BITP_MASS,
 )
-from ._rockloop import _massless, _with_mass, bit_step
+from ._rockloop import _coeffs, _massless, _with_mass, bit_step
 from ._slotgrid import (
     _nb_absmax,
     _nb_delayed,
@@ -90,7 +86,8 @@ CT_DT, CT_STOP, CT_QUIET, CT_FRAC, CT_CAP, CT_CUT, CT_SIZE = 0, 1, 2, 3, 4, 5, 6
 
 @numba.njit(cache=CACHE, nogil=True)
 def _nb_advance(bs, trial, bp, E, T):
-    """:func:`_bit_advance` on a copy ``trial`` of the bit's state ``bs``."""
+    """The time the bit takes under the constant input ``E`` to its first change of branch within
+    ``T``, else ``T``: the bit's state ``bs`` advanced on its copy ``trial`` (left unchanged)."""
     for r in range(bs.size):
         trial[r] = bs[r]
     done = 0.0
@@ -112,12 +109,10 @@ def _nb_advance(bs, trial, bp, E, T):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _nb_force(bs, bp):
-    """``_Bit.force``."""
-    if bs[BIT_BRANCH] == 0.0:
-        return bp[BITP_K] * bs[BIT_P]
-    if bs[BIT_BRANCH] == 1.0:
-        return max(bp[BITP_KU] * (bs[BIT_P] - bs[BIT_PPERM]), 0.0)
-    return 0.0
+    """The rock's force on the bit (``_Bit.force``), by the branch's line as the plain lattice's loop
+    takes it (:func:`~impactbar.laws.rodrock._rockloop._coeffs`)."""
+    b, ref = _coeffs(bs, bp)
+    return max(b * (bs[BIT_P] - ref), 0.0)
 
 
 @numba.njit(cache=CACHE, nogil=True)
