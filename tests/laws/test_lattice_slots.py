@@ -174,8 +174,8 @@ def test_the_blows_energy_account_closes(coupled, held):
 
 
 def test_on_whole_length_rods_the_coupled_blow_converges():
-    """On a rod of whole piston lengths (no delays; the first separation, the re-contact's echo and
-    the end on the steps' ends) from 8 to 128 cells: the circuit's state after the blow at second
+    """On a rod of whole piston lengths (no delays; the first separation and the end on the steps'
+    ends) from 8 to 128 cells: the circuit's state after the blow at second
     order (measured 9.0e-5, 2.7e-5, 7.0e-6, 1.7e-6, 3.5e-7), the work dissipated in the rock within
     2e-8 (1.9e-8 to 3.5e-10) and the account closed to rounding. The piston's velocity after the
     blow converges more slowly (5.6e-5, 2.8e-5, 2.7e-5, 1.3e-5, 6.3e-7): the re-contact is located
@@ -258,5 +258,5 @@ def test_the_slots_orbit_is_within_1e_5_of_the_exact_orbit():
         assert np.allclose(mu, mu_ex, rtol=0.0, atol=5e-5) and abs(mu[-1] - mu_ex[-1]) < 1e-6, (n, mu, mu_ex)
     assert dist[8] < 1e-5 and dist[16] < 1e-6 and dist[32] < 1e-7, dist  # (at order 2.7 and 3.3)
     # on to 128 cells more slowly (measured 2.7e-8 and 1.4e-8 on 64 and 128 cells, the work on the
-    # rock; 143 times from 8 cells, order 1.8 on average): the coupled blow's tail (the test below)
+    # rock; 143 times from 8 cells, order 1.8 on average): the coupled blow's tail (the test above)
     assert dist[128] < 3e-8 and dist[8] / dist[128] > 100.0, dist
