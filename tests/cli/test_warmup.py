@@ -246,8 +246,8 @@ def test_ctrl_c_ends_a_parallel_warmup_and_keeps_what_finished(tmp_path):
 
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONUNBUFFERED="1")
     # (started as a terminal starts a command, Ctrl-C not ignored: a child inherits an ignored SIGINT,
-    # and a test process may have been left ignoring it by another test it ran, so that the command,
-    # as Python does, would keep ignoring it)
+    # and the tests may run ignoring it, as a background job of a shell without job control does, so
+    # that the command, as Python does, would keep ignoring it)
     proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "warmup", "--jobs", "2"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
