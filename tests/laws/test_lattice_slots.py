@@ -36,6 +36,18 @@ def _rel(a, b):
     return (a - b) / abs(b)
 
 
+def _errors(c, ex):
+    """A coupled blow ``c``'s differences from the exact one ``ex`` (``DrivenContact``s), relative and
+    absolute: the work dissipated in the rock, the permanent penetration, the circuit's state after
+    the blow (its largest component's) and the piston's velocity after it."""
+    b, bx = c.record.blow, ex.record.blow
+    z_ex = np.asarray(ex.drive_state.z)
+    return np.array([abs(_rel(b.work_on_rock, bx.work_on_rock)),
+                     abs(_rel(b.permanent_penetration, bx.permanent_penetration)),
+                     float(np.max(np.abs(np.asarray(c.drive_state.z) - z_ex) / np.abs(z_ex))),
+                     abs(_rel(c.v_after[0], ex.v_after[0]))])
+
+
 @pytest.fixture(scope="module")
 def held(arrival):
     """The blow with the drive's force held at the arrival's, over 14 piston travel times: the exact
@@ -128,18 +140,14 @@ def test_the_coupled_blow_converges_to_the_exact_blow(coupled):
     """The work dissipated in the rock and the permanent penetration (measured -1.5e-6, -4.6e-7,
     -2.3e-8 and -7.4e-7, -2.3e-7, -1.2e-8 on 8, 16 and 32 cells), and the piston's velocity after
     (-1.3e-6, 2.2e-6, 3.5e-7)."""
-    ex = coupled["exact"].record.blow
-    dw = {n: abs(_rel(coupled[n].record.blow.work_on_rock, ex.work_on_rock)) for n in CELLS}
-    dp = {n: abs(_rel(coupled[n].record.blow.permanent_penetration, ex.permanent_penetration)) for n in CELLS}
-    dv = {n: abs(_rel(coupled[n].v_after[0], coupled["exact"].v_after[0])) for n in CELLS}
+    err = {n: _errors(coupled[n], coupled["exact"]) for n in CELLS}
+    dw, dp, dz, dv = ({n: float(e[i]) for n, e in err.items()} for i in range(4))
     assert dw[8] < 3e-6 and dw[32] < 5e-8 and dw[8] / dw[32] > 16.0, dw
     assert dp[8] < 1.5e-6 and dp[32] < 3e-8 and dp[8] / dp[32] > 16.0, dp
     assert max(dv.values()) < 5e-6 and dv[32] < 1e-6, dv
     # the circuit's state after the blow (measured 1.4e-6, 6.8e-7, 9.6e-8: the drive meets the arriving
     # wave's slots; with each step's average of it 8.3e-5, 6.1e-5, 3.1e-5; the plain lattice's 6.6e-3,
     # 1.3e-3, 1.8e-3)
-    z_ex = np.asarray(coupled["exact"].drive_state.z)
-    dz = {n: float(np.max(np.abs(np.asarray(coupled[n].drive_state.z) - z_ex) / np.abs(z_ex))) for n in CELLS}
     assert dz[8] < 3e-6 and dz[16] < 1.5e-6 and dz[32] < 2e-7, dz
 
 
@@ -185,16 +193,13 @@ def test_on_whole_length_rods_the_coupled_blow_converges():
 
     model, drive, state, t0, q, v = drifter_arrival(WHOLE_CELLS)
     ex = model.law.driven_contact(model, drive, state, t0, q, v)
-    z_ex = np.asarray(ex.drive_state.z)
     dz, dw, dv = {}, {}, {}
     for n in (8, 16, 32, 64, 128):
         m = _slots(model, n)
         c = m.law.driven_contact(m, drive, state, t0, q, v)
         b = c.record.blow
         assert all(d == 0.0 for _, d in BlowMap(m, FourierLoad(1.0, []), 0.0).grid.delays)
-        dz[n] = float(np.max(np.abs(np.asarray(c.drive_state.z) - z_ex) / np.abs(z_ex)))
-        dw[n] = abs(_rel(b.work_on_rock, ex.record.blow.work_on_rock))
-        dv[n] = abs(_rel(c.v_after[0], ex.v_after[0]))
+        dw[n], _, dz[n], dv[n] = _errors(c, ex)
         parts = b.work_on_rock + b.rock_stored_energy + b.piston_energy + b.rod_energy + b.grid_loss
         assert abs(b.available_energy - parts) <= 1e-12 * b.energy_at_impact
     assert all(dz[n] / dz[2 * n] > 3.0 for n in (8, 16, 32, 64)), dz
@@ -212,17 +217,7 @@ def test_the_coupled_blow_converges_up_to_128_cells(arrival, coupled):
     ex = coupled["exact"]
     m = _slots(model, 128)
     fine = m.law.driven_contact(m, drive, state, t0, q, v)
-    coarse = coupled[8]
-
-    def errors(c):
-        b, bx = c.record.blow, ex.record.blow
-        z_ex = np.asarray(ex.drive_state.z)
-        z = np.max(np.abs(np.asarray(c.drive_state.z) - z_ex) / np.abs(z_ex))
-        return np.array([abs(_rel(b.work_on_rock, bx.work_on_rock)),
-                         abs(_rel(b.permanent_penetration, bx.permanent_penetration)),
-                         z, abs(_rel(c.v_after[0], ex.v_after[0]))])
-
-    e8, e128 = errors(coarse), errors(fine)
+    e8, e128 = _errors(coupled[8], ex), _errors(fine, ex)
     assert np.all(e128 < [1e-8, 5e-9, 3e-8, 1e-7]), e128
     ratio = e8 / e128
     assert ratio[0] > 256.0 and ratio[1] > 256.0 and ratio[2] > 50.0 and ratio[3] > 20.0, ratio
