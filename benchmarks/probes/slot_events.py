@@ -35,7 +35,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "laws"))
 
-from coupled_reference import WHOLE_CELLS, drifter_arrival  # noqa: E402
+from coupled_reference import WHOLE_CELLS, blow_differences, drifter_arrival  # noqa: E402
 
 
 def _slots(model, n):
@@ -49,13 +49,10 @@ def envelope(arrival, cells, count):
     for i, eps in enumerate(np.linspace(-0.02, 0.02, count)):
         vv = np.asarray(v, dtype=float) * (1.0 + eps)
         ex = model.law.driven_contact(model, drive, state, t0, q, vv)
-        z_ex = np.asarray(ex.drive_state.z)
         for n in cells:
             m = _slots(model, n)
-            c = m.law.driven_contact(m, drive, state, t0, q, vv)
-            z = float(np.max(np.abs(np.asarray(c.drive_state.z) - z_ex) / np.abs(z_ex)))
-            rows[n].append((abs(c.v_after[0] / ex.v_after[0] - 1.0),
-                            abs(c.record.blow.work_on_rock / ex.record.blow.work_on_rock - 1.0), z))
+            work, _, z, velocity = blow_differences(m.law.driven_contact(m, drive, state, t0, q, vv), ex)
+            rows[n].append((velocity, work, z))
         errors = " ".join(f"{rows[n][-1][0]:.1e}" for n in cells)
         print(f"arrival {i} eps {eps:+.4f}: velocity after {errors}", flush=True)
     print("cells | largest: velocity after, work on rock, circuit's state | velocity rms")

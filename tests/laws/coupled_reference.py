@@ -43,7 +43,7 @@ from numpy.polynomial import chebyshev as C
 from scipy.fft import dct
 from scipy.integrate import solve_ivp
 
-__all__ = ["ReferenceBlow", "WHOLE_CELLS", "drifter_arrival", "reference_blow"]
+__all__ = ["ReferenceBlow", "WHOLE_CELLS", "blow_differences", "drifter_arrival", "reference_blow"]
 
 #: The rod of whole piston lengths (448.54236 mm and three times that) for :func:`drifter_arrival`.
 WHOLE_CELLS = {"rod.segments.0.length": "448.54236 mm", "rod.segments.1.length": "1345.62708 mm"}
@@ -540,3 +540,20 @@ def drifter_arrival(values=None):
     blow = ib.simulate(lattice, drive, start, 7.0).impacts[1]
     state = ib.simulate(lattice, drive, start, blow.t0 - 1e-12)._final_drive
     return exact, drive, state, blow.t0, blow.q_before, blow.v_before
+
+
+def blow_differences(c, ex):
+    """A coupled blow ``c``'s differences from another, ``ex`` (``DrivenContact``s; the exact one),
+    each relative and absolute: the work dissipated in the rock, the permanent penetration, the
+    circuit's state after the blow (its largest component's) and the piston's velocity after it.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+    """
+    b, bx = c.record.blow, ex.record.blow
+    z_ex = np.asarray(ex.drive_state.z)
+    return np.array([abs(b.work_on_rock / bx.work_on_rock - 1.0),
+                     abs(b.permanent_penetration / bx.permanent_penetration - 1.0),
+                     float(np.max(np.abs(np.asarray(c.drive_state.z) - z_ex) / np.abs(z_ex))),
+                     abs(c.v_after[0] / ex.v_after[0] - 1.0)])
