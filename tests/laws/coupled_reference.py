@@ -43,7 +43,8 @@ from numpy.polynomial import chebyshev as C
 from scipy.fft import dct
 from scipy.integrate import solve_ivp
 
-__all__ = ["ReferenceBlow", "WHOLE_CELLS", "blow_differences", "drifter_arrival", "reference_blow"]
+__all__ = ["ReferenceBlow", "WHOLE_CELLS", "blow_differences", "drifter_arrival", "held_blow",
+           "reference_blow"]
 
 #: The rod of whole piston lengths (448.54236 mm and three times that) for :func:`drifter_arrival`.
 WHOLE_CELLS = {"rod.segments.0.length": "448.54236 mm", "rod.segments.1.length": "1345.62708 mm"}
@@ -540,6 +541,37 @@ def drifter_arrival(values=None):
     blow = ib.simulate(lattice, drive, start, 7.0).impacts[1]
     state = ib.simulate(lattice, drive, start, blow.t0 - 1e-12)._final_drive
     return exact, drive, state, blow.t0, blow.q_before, blow.v_before
+
+
+def held_blow(arrival, model, window: float = 14.0):
+    """The blow of ``model`` (a model of :func:`drifter_arrival`'s, its law as the caller set it) from
+    ``arrival`` with the drive's force held at its value there, over ``window`` travel times of the
+    piston (``window / s``): no drive's state, so that what differs is the rod's and the bit's.
+
+    Parameters
+    ----------
+    arrival : tuple
+        :func:`drifter_arrival`'s.
+    model : BarModel
+        The model whose law solves the blow (its ``blow_time`` set here).
+    window : float, optional
+        The blow's duration in the piston's travel times.
+
+    Returns
+    -------
+    tuple of float
+        ``(v_after[0], work dissipated in the rock)``: the piston's velocity after the blow and the
+        work on the rock less the energy stored in it at the end (model units).
+    """
+    import dataclasses
+
+    from impactbar.loads import FourierLoad
+
+    _, drive, state, _, q, v = arrival
+    load = FourierLoad(float(drive.force(state.mode, state.z, q, v)), [])
+    m = model.with_(impact=dataclasses.replace(model.law, blow_time=window / model.s))
+    _, va, _, rec = m.law.contact(m, load, 0.0, q, v)
+    return float(va[0]), float(rec.blow.work_on_rock - rec.blow.rock_stored_energy)
 
 
 def blow_differences(c, ex):

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from coupled_reference import blow_differences, drifter_arrival
+from coupled_reference import blow_differences, drifter_arrival, held_blow
 
 from impactbar.laws.rodrock._rockslots import SlotLattice
 from impactbar.laws.rodrock.blow import _bit_records, _start_bit
@@ -41,20 +41,12 @@ def held(arrival):
     """The blow with the drive's force held at the arrival's, over 14 piston travel times: the exact
     blow's and the slots' on 8, 16 and 32 cells, and the plain lattice's on 8:
     ``(v_after[0], work dissipated in the rock)`` each."""
-    model, drive, state, t0, q, v = arrival
-    load = FourierLoad(float(drive.force(state.mode, state.z, q, v)), [])
-    window = 14.0 / model.s
-
-    def blow(m):
-        qa, va, _, rec = m.law.contact(m, load, 0.0, q, v)
-        b = rec.blow
-        return float(va[0]), float(b.work_on_rock - b.rock_stored_energy)
-
-    out = {"exact": blow(model.with_(impact=dataclasses.replace(model.law, blow_time=window)))}
+    model = arrival[0]
+    out = {"exact": held_blow(arrival, model)}
     for n in CELLS:
-        out[n] = blow(_slots(model, n, blow_time=window))
-    plain = dataclasses.replace(model.law, method="lattice", cells_per_piston=8, blow_time=window)
-    out["plain"] = blow(model.with_(impact=plain))
+        out[n] = held_blow(arrival, _slots(model, n))
+    plain = dataclasses.replace(model.law, method="lattice", cells_per_piston=8)
+    out["plain"] = held_blow(arrival, model.with_(impact=plain))
     return out
 
 
