@@ -29,7 +29,10 @@ differences of the piston's velocity after the blow and of the work dissipated i
 exact blow's, for the slots as they are (numpy), the slots with moments, and the moments without the
 impact's slopes and without the bit's. With ``--coupled``: the library's coupled blow under the oil
 circuit from the tests' arrival (its chunks, its drive, its end) on the library's slots and on
-:class:`MomentLattice` (the moments resumable, in ``SlotLattice``'s place), against the exact blow.
+:class:`MomentLattice` (the moments resumable, in ``SlotLattice``'s place), against the exact blow;
+``--drive-pieces``: the moments' driven end takes the circuit's force over the drive's intervals;
+``--linear-drive``: the circuit takes the moments' arriving wave linear in each slot (every slot's
+edge a break of the drive, for both columns).
 Figures: ``benchmarks/HISTORY.md``, "slots that carry their slopes".
 """
 
@@ -409,7 +412,7 @@ class MomentLattice:
             step = self.base + i
             arriving[i] = float(GG[0] @ W)
             if arriving_slots:
-                arr.append((W.copy(), GG[0].copy()))
+                arr.append((W.copy(), GG[0].copy(), SG[0].copy()))  # (a third: the slopes)
             if record_field:
                 field[i] = (FF + GG) @ W
             partial = i == n - 1 and frac < 1.0
@@ -629,7 +632,64 @@ def held(rod, cells) -> None:
         _rockslots.SlotLattice = plain
 
 
-def coupled(rod, cells, drive_pieces=False) -> None:
+def _linear_drive_input(plain):
+    """``_Slots.drive_input`` whose intervals take the arriving wave linear in each of its slots
+    (:class:`MomentLattice`'s slopes, where its arriving slots carry them) rather than constant: a
+    callable with a ``spline`` (the form the circuit's compiled flight takes, as the exact blow's)."""
+
+    def drive_input(self, arriving, k, t0, L, frac=1.0):
+        breaks, values, starts = plain(self, arriving, k, t0, L, frac)
+        if not all(len(a) == 3 for a in arriving[:L]):
+            return breaks, values, starts
+        dt, z0 = self.grid.cell_time, float(self.grid.Z[0])
+        lo, hi, val, slope = [], [], [], []
+        for i in range(L):
+            W, g, sg = arriving[i]
+            edges = t0 + dt * (k + i + np.concatenate(([0.0], np.cumsum(W))))
+            lo += list(edges[:-1])
+            hi += list(edges[1:])
+            val += list(-2.0 * g / z0)
+            slope += list(-2.0 * sg / z0 / dt)  # (per unit time)
+        lo, hi, val, slope = (np.array(x) for x in (lo, hi, val, slope))
+        slope[hi - lo < 1e-6 * dt] = 0.0  # (a sliver's slope is its rounding: constant there)
+        incoming = []
+        for a, b in zip(breaks[:-1], breaks[1:], strict=True):
+            inside = np.flatnonzero((hi > a + 1e-12 * dt) & (lo < b - 1e-12 * dt))
+            starts_ = np.maximum(lo[inside], a) - a
+            keep = np.ones(inside.size, dtype=bool)  # (a segment narrower than 1e-9 of a step: its
+            last = 0                                  # neighbour's line goes on over it)
+            for j in range(1, inside.size):
+                if starts_[j] - starts_[last] <= 1e-9 * dt or (b - a) - starts_[j] <= 1e-9 * dt:
+                    keep[j] = False
+                else:
+                    last = j
+            inside, starts_ = inside[keep], starts_[keep]
+            knots = np.concatenate((starts_, [b - a]))
+            centre = 0.5 * (lo[inside] + hi[inside]) - a
+            c = np.zeros((4, inside.size))
+            c[2] = slope[inside]
+            c[3] = val[inside] + slope[inside] * (knots[:-1] - centre)
+            incoming.append(_spline_function(knots, c, float(a)))
+        return breaks, incoming, starts
+
+    return drive_input
+
+
+def _spline_function(x, c, t0):
+    """A callable of the time with the ``spline`` attribute ``(x, c, t0)`` (piecewise cubic in
+    ``t - t0``, scipy's order of coefficients)."""
+
+    def a(t):
+        tt = t - t0
+        i = min(max(int(np.searchsorted(x, tt, side="right")) - 1, 0), x.size - 2)
+        s = tt - x[i]
+        return ((c[3, i] + c[2, i] * s) + c[1, i] * s * s) + c[0, i] * s ** 3
+
+    a.spline = (x, c, t0)
+    return a
+
+
+def coupled(rod, cells, drive_pieces=False, linear_drive=False) -> None:
     """The library's coupled blow under the oil circuit from the tests' arrival on the slots as they
     are and on :class:`MomentLattice` (put in the place of ``SlotLattice``), against the exact
     blow: the relative differences of the work dissipated in the rock, the circuit's state after the
@@ -640,7 +700,14 @@ def coupled(rod, cells, drive_pieces=False) -> None:
 
     model, drive, state, t0, q, v = drifter_arrival(RODS[rod])
     ex = model.law.driven_contact(model, drive, state, t0, q, v)
+    from impactbar.laws.rodrock import coupled as coupled_module
+
     plain = _rockslots.SlotLattice
+    plain_input = coupled_module._Slots.drive_input
+    plain_jump = coupled_module.DRIVE_JUMP
+    if linear_drive:  # (every slot's edge a break: the lines meet the integrator one at a time)
+        coupled_module._Slots.drive_input = _linear_drive_input(plain_input)
+        coupled_module.DRIVE_JUMP = -1.0
     if drive_pieces:  # (the moments take the circuit's force over the drive's intervals)
         drive.__dict__["abilities"] = dataclasses.replace(
             drive.abilities, end_flight=DRIVE_PIECES.wrap(drive.abilities.end_flight))
@@ -660,6 +727,8 @@ def coupled(rod, cells, drive_pieces=False) -> None:
             print(f"{n:5d} | " + " | ".join(cols), flush=True)
     finally:
         _rockslots.SlotLattice = plain
+        coupled_module._Slots.drive_input = plain_input
+        coupled_module.DRIVE_JUMP = plain_jump
 
 
 def main(argv=None) -> None:
@@ -671,9 +740,12 @@ def main(argv=None) -> None:
     parser.add_argument("--drive-pieces", action="store_true",
                         help="with --coupled: the moments' driven end takes the circuit's force over the "
                              "drive's intervals inside each step, not the step's average")
+    parser.add_argument("--linear-drive", action="store_true",
+                        help="with --coupled: the circuit takes the moments' arriving wave linear in "
+                             "each slot")
     args = parser.parse_args(argv)
     if args.coupled:
-        coupled(args.rod, args.cells, args.drive_pieces)
+        coupled(args.rod, args.cells, args.drive_pieces, args.linear_drive)
         return
 
     held(args.rod, args.cells)
