@@ -62,6 +62,9 @@ TINY = 1e-12
 CUT_JUMP = 1e-4
 #: More events' cuts in one step than this is taken for a loop that does not advance.
 MAX_CUTS = 10_000
+#: With ``--linear-drive``, a slot narrower than this fraction of a step hands the circuit its average
+#: only (its slope 0: a narrow slot's slope is mostly its rounding).
+SLIVER_SLOPE = 1e-6
 _bit_advance = LS._bit_advance
 
 
@@ -651,7 +654,7 @@ def _linear_drive_input(plain):
             val += list(-2.0 * g / z0)
             slope += list(-2.0 * sg / z0 / dt)  # (per unit time)
         lo, hi, val, slope = (np.array(x) for x in (lo, hi, val, slope))
-        slope[hi - lo < 1e-6 * dt] = 0.0  # (a sliver's slope is its rounding: constant there)
+        slope[hi - lo < SLIVER_SLOPE * dt] = 0.0  # (a sliver's slope is its rounding: constant there)
         incoming = []
         for a, b in zip(breaks[:-1], breaks[1:], strict=True):
             inside = np.flatnonzero((hi > a + 1e-12 * dt) & (lo < b - 1e-12 * dt))
