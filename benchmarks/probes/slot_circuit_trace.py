@@ -16,7 +16,6 @@ their slopes".
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -25,7 +24,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "laws"))
 
-from coupled_reference import drifter_arrival  # noqa: E402
+from coupled_reference import drifter_arrival, slots_model  # noqa: E402
 
 
 def state_at(contact, t):
@@ -48,8 +47,8 @@ def main(argv=None) -> None:
     ex = model.law.driven_contact(model, drive, state, t0, q, v)
     duration = ex.t_release - t0
     for n in args.cells:
-        law = dataclasses.replace(model.law, method="lattice", cells_per_piston=n, contact_events="slots")
-        c = law.driven_contact(model.with_(impact=law), drive, state, t0, q, v)
+        m = slots_model(model, n)
+        c = m.law.driven_contact(m, drive, state, t0, q, v)
         print(f"{n} cells: fraction of the blow | front, rear chamber (relative) | w's difference | w")
         for f in np.linspace(args.start, 1.0, args.points):
             t = t0 + f * duration

@@ -28,14 +28,13 @@ tail on the example's rod".
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "laws"))
 
-from coupled_reference import WHOLE_CELLS, drifter_arrival, held_blow  # noqa: E402
+from coupled_reference import WHOLE_CELLS, drifter_arrival, held_blow, slots_model  # noqa: E402
 
 RODS = {"example": None,
         "shank": {"rod.segments.1.length": WHOLE_CELLS["rod.segments.1.length"]},
@@ -73,8 +72,7 @@ def main(argv=None) -> None:
           f"max slots {_rockslots.SlotLattice.__init__.__defaults__[0]}")
     print("cells | delays' fractions | velocity after | work dissipated")
     for n in args.cells:
-        m = model.with_(impact=dataclasses.replace(model.law, method="lattice", cells_per_piston=n,
-                                                   contact_events="slots"))
+        m = slots_model(model, n)
         v, w = held_blow(arrival, m)
         fractions = " ".join(f"{d:.3f}" for _, d in delays(m)) or "-"
         print(f"{n:5d} | {fractions:>11} | {v / v_ex - 1.0:+.2e} | {w / w_ex - 1.0:+.2e}", flush=True)

@@ -26,7 +26,6 @@ re-contact".
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -35,12 +34,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "laws"))
 
-from coupled_reference import WHOLE_CELLS, blow_differences, drifter_arrival  # noqa: E402
-
-
-def _slots(model, n):
-    law = dataclasses.replace(model.law, method="lattice", cells_per_piston=n, contact_events="slots")
-    return model.with_(impact=law)
+from coupled_reference import WHOLE_CELLS, blow_differences, drifter_arrival, slots_model  # noqa: E402
 
 
 def envelope(arrival, cells, count):
@@ -50,7 +44,7 @@ def envelope(arrival, cells, count):
         vv = np.asarray(v, dtype=float) * (1.0 + eps)
         ex = model.law.driven_contact(model, drive, state, t0, q, vv)
         for n in cells:
-            m = _slots(model, n)
+            m = slots_model(model, n)
             work, _, z, velocity = blow_differences(m.law.driven_contact(m, drive, state, t0, q, vv), ex)
             rows[n].append((velocity, work, z))
         errors = " ".join(f"{rows[n][-1][0]:.1e}" for n in cells)
@@ -71,7 +65,7 @@ def impulse(arrival, cells, eps, threshold):
     changes = T[np.flatnonzero(on[1:] != on[:-1])]
     print("the exact contact opens or closes at", ", ".join(f"{t:.9f}" for t in changes))
     for n in cells:
-        m = _slots(model, n)
+        m = slots_model(model, n)
         b = m.law.driven_contact(m, drive, state, t0, q, v).record.blow
         h, jf = b.cell_time, b.junction_forces[:, 0]
         print(f"{n} cells: the impulse {b.junction_impulse(0) - bx.junction_impulse(0):+.3e} off")

@@ -53,7 +53,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 sys.path.insert(0, str(ROOT / "tests" / "laws"))
 
 import lattice_slots as LS  # noqa: E402
-from coupled_reference import drifter_arrival  # noqa: E402
+from coupled_reference import drifter_arrival, slots_model  # noqa: E402
 from slot_delay_fraction import RODS  # noqa: E402
 
 #: A cut closer than this fraction of a step to one of its slot's ends is not made.
@@ -601,11 +601,6 @@ class _NoBitSlope(MomentLattice):
     bit_slope = False
 
 
-def _slots_model(model, n):
-    law = dataclasses.replace(model.law, method="lattice", cells_per_piston=n, contact_events="slots")
-    return model.with_(impact=law)
-
-
 def held(rod, cells) -> None:
     """The blow with the drive's force held (``coupled_reference.held_blow``) on the library's slots
     and on :class:`MomentLattice` and its two variants (each in ``SlotLattice``'s place, 24 slots a
@@ -628,7 +623,7 @@ def held(rod, cells) -> None:
             cols = []
             for cls in variants.values():
                 _rockslots.SlotLattice = cls
-                v, w = held_blow(arrival, _slots_model(model, n))
+                v, w = held_blow(arrival, slots_model(model, n))
                 cols.append(f"{v / v_ex - 1.0:+.2e} {w / w_ex - 1.0:+.2e}")
             print(f"{n:5d} | " + " | ".join(cols), flush=True)
     finally:
@@ -724,7 +719,7 @@ def coupled(rod, cells, drive_pieces=False, linear_drive=False) -> None:
             for cls in (plain, MomentLattice):
                 _rockslots.SlotLattice = cls  # (both at their default of 24 slots a step)
                 DRIVE_PIECES.on, DRIVE_PIECES.intervals = drive_pieces and cls is MomentLattice, {}
-                m = _slots_model(model, n)
+                m = slots_model(model, n)
                 d = blow_differences(m.law.driven_contact(m, drive, state, t0, q, v), ex)
                 cols.append(f"{d[0]:.2e} {d[2]:.2e} {d[3]:.2e}")
             print(f"{n:5d} | " + " | ".join(cols), flush=True)

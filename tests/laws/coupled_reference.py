@@ -44,7 +44,7 @@ from scipy.fft import dct
 from scipy.integrate import solve_ivp
 
 __all__ = ["ReferenceBlow", "WHOLE_CELLS", "blow_differences", "drifter_arrival", "held_blow",
-           "reference_blow"]
+           "reference_blow", "slots_model"]
 
 #: The rod of whole piston lengths (448.54236 mm and three times that) for :func:`drifter_arrival`.
 WHOLE_CELLS = {"rod.segments.0.length": "448.54236 mm", "rod.segments.1.length": "1345.62708 mm"}
@@ -541,6 +541,27 @@ def drifter_arrival(values=None):
     blow = ib.simulate(lattice, drive, start, 7.0).impacts[1]
     state = ib.simulate(lattice, drive, start, blow.t0 - 1e-12)._final_drive
     return exact, drive, state, blow.t0, blow.q_before, blow.v_before
+
+
+def slots_model(model, cells: int):
+    """``model`` with its rod-rock law's blows on the slot lattice of ``cells`` cells a piston
+    (``method="lattice"``, ``contact_events="slots"``).
+
+    Parameters
+    ----------
+    model : BarModel
+        Under :class:`~impactbar.RodRock` (:func:`drifter_arrival`'s).
+    cells : int
+        Cells per piston.
+
+    Returns
+    -------
+    BarModel
+    """
+    import dataclasses
+
+    law = dataclasses.replace(model.law, method="lattice", cells_per_piston=cells, contact_events="slots")
+    return model.with_(impact=law)
 
 
 def held_blow(arrival, model, window: float = 14.0):

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from coupled_reference import blow_differences, drifter_arrival, held_blow
+from coupled_reference import blow_differences, drifter_arrival, held_blow, slots_model
 
 from impactbar.laws.rodrock._rockslots import SlotLattice
 from impactbar.laws.rodrock.blow import _bit_records, _start_bit
@@ -26,12 +26,6 @@ def arrival():
     return drifter_arrival()
 
 
-def _slots(model, cells, **kw):
-    law = dataclasses.replace(model.law, method="lattice", cells_per_piston=cells, contact_events="slots",
-                              **kw)
-    return model.with_(impact=law)
-
-
 def _rel(a, b):
     return (a - b) / abs(b)
 
@@ -44,7 +38,7 @@ def held(arrival):
     model = arrival[0]
     out = {"exact": held_blow(arrival, model)}
     for n in CELLS:
-        out[n] = held_blow(arrival, _slots(model, n))
+        out[n] = held_blow(arrival, slots_model(model, n))
     plain = dataclasses.replace(model.law, method="lattice", cells_per_piston=8)
     out["plain"] = held_blow(arrival, model.with_(impact=plain))
     return out
@@ -66,7 +60,7 @@ def test_the_held_blow_converges_to_the_exact_blow(held):
 def test_the_slots_state_is_carried_between_runs(arrival):
     """The lattice run in pieces (the coupled blow's chunks) is the same, to the bit, as in one run."""
     model, drive, state, t0, q, v = arrival
-    m = _slots(model, 8)
+    m = slots_model(model, 8)
     bm = BlowMap(m, FourierLoad(1.0, []), 0.0)
     grid = bm.grid
     assert grid.slots and len(grid.delays) == 2 and all(0.0 < d < 1.0 for _, d in grid.delays)
@@ -98,7 +92,7 @@ def coupled(arrival):
     model, drive, state, t0, q, v = arrival
     out = {"exact": model.law.driven_contact(model, drive, state, t0, q, v)}
     for n in CELLS:
-        m = _slots(model, n)
+        m = slots_model(model, n)
         out[n] = m.law.driven_contact(m, drive, state, t0, q, v)
     return out
 
@@ -136,7 +130,7 @@ def test_the_coupled_blow_does_not_depend_on_its_start_time(arrival, coupled):
     and one narrower than the times' rounding there (a slot's edge 1e-13 of a step from another) is
     joined to its neighbour rather than handed to the circuit's integrator, which refuses it."""
     model, drive, state, t0, q, v = arrival
-    m = _slots(model, 8)
+    m = slots_model(model, 8)
     zero = m.law.driven_contact(m, drive, state, 0.0, q, v)
     at = coupled[8]
     assert zero.t_release == pytest.approx(at.t_release - t0, rel=1e-12)
@@ -175,7 +169,7 @@ def test_on_whole_length_rods_the_coupled_blow_converges():
     ex = model.law.driven_contact(model, drive, state, t0, q, v)
     dz, dw, dv = {}, {}, {}
     for n in (8, 16, 32, 64, 128):
-        m = _slots(model, n)
+        m = slots_model(model, n)
         c = m.law.driven_contact(m, drive, state, t0, q, v)
         b = c.record.blow
         assert all(d == 0.0 for _, d in BlowMap(m, FourierLoad(1.0, []), 0.0).grid.delays)
@@ -195,7 +189,7 @@ def test_the_coupled_blow_converges_up_to_128_cells(arrival, coupled):
     (1.4e-6 to 1.4e-8) and the piston's velocity after it 37 times (1.3e-6 to 3.4e-8, not monotone)."""
     model, drive, state, t0, q, v = arrival
     ex = coupled["exact"]
-    m = _slots(model, 128)
+    m = slots_model(model, 128)
     fine = m.law.driven_contact(m, drive, state, t0, q, v)
     e8, e128 = blow_differences(coupled[8], ex), blow_differences(fine, ex)
     assert np.all(e128 < [1e-8, 5e-9, 3e-8, 1e-7]), e128
@@ -228,7 +222,7 @@ def test_the_slots_orbit_is_within_1e_5_of_the_exact_orbit():
     exact, mu_ex = figures(model.with_(impact=dataclasses.replace(model.law, method="exact")))
     dist = {}
     for n in (8, 16, 32, 64, 128):
-        got, mu = figures(_slots(model, n))
+        got, mu = figures(slots_model(model, n))
         dist[n] = max(abs(_rel(got[k], exact[k])) for k in exact)
         assert np.allclose(mu, mu_ex, rtol=0.0, atol=5e-5) and abs(mu[-1] - mu_ex[-1]) < 1e-6, (n, mu, mu_ex)
     assert dist[8] < 1e-5 and dist[16] < 1e-6 and dist[32] < 1e-7, dist  # (at order 2.7 and 3.3)
