@@ -124,16 +124,18 @@ def _project(pe, pv, ps, te):
     return av, sl
 
 
+def _joined(prev, W_prev, cur, W, shift):
+    """The step before's pieces ``prev`` (on ``W_prev``) and this step's ``cur`` (on ``W``), each
+    ``(values, slopes)``, as one signal moved by ``shift`` (fractions of a step): its edges, values and
+    slopes."""
+    pe = np.concatenate((_edges(W_prev) + shift - 1.0, _edges(W)[1:] + shift))
+    return pe, np.concatenate((prev[0], cur[0])), np.concatenate((prev[1], cur[1]))
+
+
 def _delayed(prev, W_prev, cur, W, delta, target):
     """(averages, slopes) on ``target`` of the P1 signal delayed by ``delta``: ``prev``, ``cur`` each
     (values, slopes)."""
-    ep = _edges(W_prev) + delta - 1.0
-    ec = _edges(W) + delta
-    pe = np.concatenate((ep, ec[1:]))
-    pv = np.concatenate((prev[0], cur[0]))
-    ps = np.concatenate((prev[1], cur[1]))
-    te = _edges(target)
-    return _project(pe, pv, ps, te)
+    return _project(*_joined(prev, W_prev, cur, W, delta), _edges(target))
 
 
 def _ends(v, s, W):
@@ -170,13 +172,11 @@ def _merge(W, pairs, cap):
         s = 12.0 * M / w ** 3
         return v, s
 
-    def energy(v, s, w):
-        return w * (v * v + s * s * w * w / 12.0)
-
     def pair_loss(i):
         v, s = merged(i)
-        return float(np.sum(energy(V[:, i], S[:, i], W[i]) + energy(V[:, i + 1], S[:, i + 1], W[i + 1])
-                            - energy(v, s, W[i] + W[i + 1])))
+        return float(np.sum(_piece_energies(V[:, i], S[:, i], W[i])
+                            + _piece_energies(V[:, i + 1], S[:, i + 1], W[i + 1])
+                            - _piece_energies(v, s, W[i] + W[i + 1])))
 
     loss = np.array([pair_loss(i) for i in range(W.size - 1)])
     while W.size > cap:
@@ -231,19 +231,22 @@ def _split(v, s, k, w1, w2):
     return out, np.insert(s, k + 1, s[:, k], axis=1)
 
 
-def _pieces_energy(v, s, W):
-    """sum over slots of int (v + s y)^2 over each slot (per unit of the step's fraction)."""
-    return float(np.sum(W * (v * v + s * s * W * W / 12.0)))
+def _piece_energies(v, s, W):
+    """Each slot's ``int (v + s y)^2`` over it (per unit of the step's fraction)."""
+    return W * (v * v + s * s * W * W / 12.0)
+
+
+def _wave_energy(F, SF, G, SG, W, Z, cells):
+    """The waves' energy over the step in the cells ``cells`` (both families; per unit time of a
+    step's fraction): ``sum (int F^2 + int G^2) / Z``."""
+    return sum((float(np.sum(_piece_energies(F[j], SF[j], W)))
+                + float(np.sum(_piece_energies(G[j], SG[j], W)))) / Z[j] for j in cells)
 
 
 def _window_energy(prev, W_prev, cur, W, a, b):
     """int over [a, b] (fractions of the current step; a may be < 0: the step before) of the P1
     signal (the step before ``prev`` on ``W_prev``, this one ``cur`` on ``W``) squared."""
-    ep = _edges(W_prev) - 1.0
-    ec = _edges(W)
-    pe = np.concatenate((ep, ec[1:]))
-    pv = np.concatenate((prev[0], cur[0]))
-    ps = np.concatenate((prev[1], cur[1]))
+    pe, pv, ps = _joined(prev, W_prev, cur, W, 0.0)
     pc = 0.5 * (pe[:-1] + pe[1:])
     e = 0.0
     for j in range(pv.size):
@@ -364,15 +367,9 @@ class MomentLattice:
 
     def _end_energies(self, FF, SF, GG, SG, W, dt, Fcur, Gout_cur, at):
         Z = self.Z
-        nc = Z.size
         n_p = int(self.bounds[0])
-        ep = er = 0.0
-        for j in range(nc):
-            e = (_pieces_energy(FF[j], SF[j], W) + _pieces_energy(GG[j], SG[j], W)) / Z[j] * dt
-            if j < n_p:
-                ep += e
-            else:
-                er += e
+        ep = sum(_wave_energy(FF, SF, GG, SG, W, Z, [j]) * dt for j in range(n_p))
+        er = sum(_wave_energy(FF, SF, GG, SG, W, Z, [j]) * dt for j in range(n_p, Z.size))
         held = 0.0
         for i, (j, d) in enumerate(self.D):
             e = _window_energy(self.srcF[i], self.W_src, Fcur[i], W, at - d, at)
@@ -381,6 +378,10 @@ class MomentLattice:
         self._energies = (ep, er, held)
 
     def run(self, dt, drive, *, stop=-1.0, quiet=0, frac=1.0, record_field=False, arriving_slots=False):
+        from impactbar.laws.rodrock._bit import _Bit
+        from impactbar.laws.rodrock._records import BITP_FEED, BITP_K, BITP_KU, BITP_MASS, BITP_Z
+        from impactbar.laws.rodrock.blow import _bit_records, _set_bit
+
         drive = np.asarray(drive, dtype=float)
         Z = self.Z
         Za, Zb = Z[:-1], Z[1:]
@@ -392,12 +393,7 @@ class MomentLattice:
         D = self.D
         nd = len(D)
         bs, bp = self.bs, self.bp
-        from impactbar.laws.rodrock._records import BITP_FEED, BITP_K, BITP_KU, BITP_MASS, BITP_Z
-
         m, feed = bp[BITP_MASS], bp[BITP_FEED]
-        from impactbar.laws.rodrock._bit import _Bit
-        from impactbar.laws.rodrock.blow import _bit_records, _set_bit
-
         bit = _Bit(bp[BITP_Z], bp[BITP_K], bp[BITP_KU], m, feed)
         _set_bit(bit, bs)
         FF, GG, SF, SG, W = self.FF, self.GG, self.SF, self.SG, self.W
@@ -410,7 +406,6 @@ class MomentLattice:
         bitf[0], pen[0] = bit.force(), bit.p
         gap, contact, last = self._gap, self.contact, self.last
         ran, ended = n, 0
-        F_out = G_out = None
         for i in range(n):
             step = self.base + i
             arriving[i] = float(GG[0] @ W)
@@ -439,45 +434,46 @@ class MomentLattice:
             jrow = np.zeros(bounds.size)
             pd = drive[i] / frac if partial else drive[i]
             k, at, ncuts = 0, 0.0, 0
+
+            def slot_values(k, FF, SF, GG, SG, Fd, Sd):
+                """Slot ``k``'s arriving waves (the delays' outputs in their cells), the welded
+                junctions' forces and the open gap's closing rate, each value and slope."""
+                Fs, Ss = FF[:, k].copy(), SF[:, k].copy()
+                for r, (j, _d) in enumerate(D):
+                    Fs[j], Ss[j] = Fd[r, k], Sd[r, k]
+                N = wa * Fs[:-1] + wb * GG[1:, k]
+                NS = wa * Ss[:-1] + wb * SG[1:, k]
+                rv = -2.0 * GG[jc + 1, k] / Zb[jc] - 2.0 * Fs[jc] / Za[jc]
+                rs = -2.0 * SG[jc + 1, k] / Zb[jc] - 2.0 * Ss[jc] / Za[jc]
+                return Fs, Ss, N, NS, rv, rs
+
             while k < W.size:
                 if partial and at >= frac - 1e-12:
                     break
+                Fs, Ss, N, NS, rv, rs = slot_values(k, FF, SF, GG, SG, Fd, Sd)
                 w = W[k]
-                for _ in range(2):  # (again after a cut: the left part's values)
-                    Fs, Ss = FF[:, k].copy(), SF[:, k].copy()
-                    for r, (j, _d) in enumerate(D):
-                        Fs[j], Ss[j] = Fd[r, k], Sd[r, k]
-                    w = W[k]
-                    N = wa * Fs[:-1] + wb * GG[1:, k]
-                    NS = wa * Ss[:-1] + wb * SG[1:, k]
-                    nw, nws = N[jc], NS[jc]
-                    rv = -2.0 * GG[jc + 1, k] / Zb[jc] - 2.0 * Fs[jc] / Za[jc]
-                    rs = -2.0 * SG[jc + 1, k] / Zb[jc] - 2.0 * Ss[jc] / Za[jc]
-                    Fi = Fs[-1]
-                    if _ == 1:
-                        break
-                    nw0 = nw - 0.5 * nws * w
-                    if contact and (nw0 < 0.0 or (nws < 0.0 and nw0 <= -1e-9 * nws * w)):
-                        contact = False
-                    elif (not contact and gap <= 0.0 and nw0 >= 0.0
-                          and not (nws < 0.0 and nw0 <= -1e-9 * nws * w)):
-                        contact = True
-                    cut, closes = 1.0, False
-                    if not contact:
-                        y = None
-                        if gap > 0.0:
-                            y = _root_quadratic(gap, dt * rs / 2.0, dt * (rv - rs * w / 2.0), w)
-                        if y is not None:
-                            cut, closes = min(y / w, 1.0), True
-                    else:
-                        y = _root_linear(nw0, nw + 0.5 * nws * w, w)
-                        if y is not None:
-                            cut = y / w
-                    adv = _bit_advance(copy.copy(bit), 2.0 * Fi + feed, w * dt) / (w * dt)
-                    if adv < cut:
-                        cut, closes = adv, False
-                    if not (TINY < cut * w and (1.0 - cut) * w > TINY):
-                        break
+                nw, nws = N[jc], NS[jc]
+                nw0 = nw - 0.5 * nws * w
+                if contact and (nw0 < 0.0 or (nws < 0.0 and nw0 <= -1e-9 * nws * w)):
+                    contact = False
+                elif (not contact and gap <= 0.0 and nw0 >= 0.0
+                      and not (nws < 0.0 and nw0 <= -1e-9 * nws * w)):
+                    contact = True
+                cut, closes = 1.0, False
+                if not contact:
+                    y = None
+                    if gap > 0.0:
+                        y = _root_quadratic(gap, dt * rs / 2.0, dt * (rv - rs * w / 2.0), w)
+                    if y is not None:
+                        cut, closes = min(y / w, 1.0), True
+                else:
+                    y = _root_linear(nw0, nw + 0.5 * nws * w, w)
+                    if y is not None:
+                        cut = y / w
+                adv = _bit_advance(copy.copy(bit), 2.0 * Fs[-1] + feed, w * dt) / (w * dt)
+                if adv < cut:
+                    cut, closes = adv, False
+                if TINY < cut * w and (1.0 - cut) * w > TINY:  # the slot cut at its first event
                     ncuts += 1
                     if ncuts > MAX_CUTS:
                         raise RuntimeError(f"step {step}: too many cuts")
@@ -488,8 +484,11 @@ class MomentLattice:
                     Fd, Sd = _split(Fd, Sd, k, w1, w2)
                     Fn, SFn, Gn, SGn, Gout, SGout = (np.insert(x, k + 1, x[:, k], axis=1)
                                                      for x in (Fn, SFn, Gn, SGn, Gout, SGout))
-                tau = W[k] * dt
-                w = W[k]
+                    Fs, Ss, N, NS, rv, rs = slot_values(k, FF, SF, GG, SG, Fd, Sd)  # (its left part's)
+                    w = W[k]
+                    nw, nws = N[jc], NS[jc]
+                Fi = Fs[-1]
+                tau = w * dt
                 if contact:
                     N[jc], NS[jc] = nw, nws
                 else:
@@ -542,7 +541,7 @@ class MomentLattice:
                 self._gap, self.contact, self.last, self.base = gap, contact, last, self.base + n
                 self._ended = 0
                 bs[:] = _bit_records(bit)[0]
-                return self._out(junc, bitf, pen, field, arriving, F_out, G_out, arr, n)
+                return self._out(junc, bitf, pen, field, arriving, F_out, G_out, arr)
             if nd:
                 thr = CUT_JUMP * max(float(np.abs(Gout).max()), 1e-300)
                 cuts = np.concatenate([_jump_cuts(self.srcG[r], self.W_src, (Gout[r], SGout[r]), W, d, thr)
@@ -555,12 +554,9 @@ class MomentLattice:
             self.srcG = [(Gout[r].copy(), SGout[r].copy()) for r in range(nd)]
             self.W_src = W.copy()
             if W.size > self.max_slots:
-                e0 = sum((_pieces_energy(Fn[j], SFn[j], W) + _pieces_energy(Gn[j], SGn[j], W)) / Z[j]
-                         for j in range(nc))
+                e0 = _wave_energy(Fn, SFn, Gn, SGn, W, Z, range(nc))
                 W, ((Fn, SFn), (Gn, SGn)) = _merge(W, [(Fn, SFn), (Gn, SGn)], self.max_slots)
-                e1 = sum((_pieces_energy(Fn[j], SFn[j], W) + _pieces_energy(Gn[j], SGn[j], W)) / Z[j]
-                         for j in range(nc))
-                self.merged += (e0 - e1) * dt
+                self.merged += (e0 - _wave_energy(Fn, SFn, Gn, SGn, W, Z, range(nc))) * dt
             junc[i] = jrow
             bitf[i + 1], pen[i + 1] = bit.force(), bit.p
             FF, GG, SF, SG = Fn, Gn, SFn, SGn
@@ -572,8 +568,7 @@ class MomentLattice:
                 ran, ended = i + 1, 2
                 break
             if not contact and last >= 0 and step % 8 == 0:
-                rod_e = sum((_pieces_energy(FF[j], SF[j], W) + _pieces_energy(GG[j], SG[j], W)) / Z[j]
-                            for j in range(n_p, nc))
+                rod_e = _wave_energy(FF, SF, GG, SG, W, Z, range(n_p, nc))
                 if rod_e * dt + 0.5 * m * bit.w ** 2 < stop:
                     ran, ended = i + 1, 1
                     break
@@ -584,13 +579,12 @@ class MomentLattice:
         self._end_energies(FF, SF, GG, SG, W, dt, [(FF[j], SF[j]) for j, _ in D],
                            [(np.zeros(W.size), np.zeros(W.size)) for r in range(nd)], 0.0)
         return self._out(junc[:ran], bitf[:ran + 1], pen[:ran + 1], field[:ran], arriving[:ran],
-                         FF @ W, GG @ W, arr[:ran], ran)
+                         FF @ W, GG @ W, arr[:ran])
 
     @staticmethod
-    def _out(junc, bitf, pen, field, arriving, F, G, arr, ran):
-        out = {"junc": junc, "bitf": bitf, "pen": pen, "field": field, "arriving": arriving, "F": F, "G": G}
-        out["arriving_slots"] = arr
-        return out
+    def _out(junc, bitf, pen, field, arriving, F, G, arr):
+        return {"junc": junc, "bitf": bitf, "pen": pen, "field": field, "arriving": arriving, "F": F, "G": G,
+                "arriving_slots": arr}
 
 
 class _NoImpactSlopes(MomentLattice):
@@ -695,11 +689,10 @@ def coupled(rod, cells, drive_pieces=False, linear_drive=False) -> None:
     from coupled_reference import blow_differences
 
     from impactbar.laws.rodrock import _rockslots
+    from impactbar.laws.rodrock import coupled as coupled_module
 
     model, drive, state, t0, q, v = drifter_arrival(RODS[rod])
     ex = model.law.driven_contact(model, drive, state, t0, q, v)
-    from impactbar.laws.rodrock import coupled as coupled_module
-
     plain = _rockslots.SlotLattice
     plain_input = coupled_module._Slots.drive_input
     plain_jump = coupled_module.DRIVE_JUMP
